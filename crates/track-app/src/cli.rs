@@ -1,0 +1,84 @@
+//! Argument parsing and dispatch for the `track` binary.
+
+use std::ffi::OsString;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use crate::commands;
+use crate::{AppError, Result};
+
+/// Visual contour tracking with particle filters (Odobez et al. 2003, Wu et al. 2003).
+///
+/// Exit codes: 0 success; 1 a computation failed; 2 bad arguments or settings; 3 bad input data
+/// (images, ground truth, video); 4 an output could not be written.
+#[derive(Debug, Parser)]
+#[command(name = "track", version, about, long_about = None, propagate_version = true)]
+pub struct Cli {
+    /// The command to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The `track` subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Generate a synthetic scene, track it and write overlays, plots and a report.
+    Demo(commands::demo::Args),
+    /// Track an object through a sequence of images or a Y4M video.
+    Run(commands::run::Args),
+    /// Evaluate trackers: Odobez's Table 1, the switching processes, or OTB sequences.
+    Eval(commands::eval::Args),
+    /// Estimate the robust parametric motion between two frames.
+    Motion(commands::motion::Args),
+    /// Learn clutter densities from images (Wu et al. §6.1).
+    LearnClutter(commands::learn_clutter::Args),
+}
+
+/// Runs a parsed command line.
+///
+/// # Errors
+/// Whatever the command reports; see [`AppError`].
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Demo(args) => commands::demo::run(&args),
+        Command::Run(args) => commands::run::run(&args),
+        Command::Eval(args) => commands::eval::run(&args),
+        Command::Motion(args) => commands::motion::run(&args),
+        Command::LearnClutter(args) => commands::learn_clutter::run(&args),
+    }
+}
+
+/// Parses `args` (the first item is the program name) and runs the command.
+///
+/// # Errors
+/// Parsing errors become [`AppError::InvalidSetting`]; everything else as [`run`].
+pub fn try_main_from_args<I, T>(args: I) -> Result<()>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli =
+        Cli::try_parse_from(args).map_err(|e| AppError::setting("arguments", e.to_string()))?;
+    run(cli)
+}
+
+/// Entry point of the binary: parses, runs, prints one clear error line and maps it to an exit code.
+pub fn main_from_args<I, T>(args: I) -> ExitCode
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        // clap prints help, version and usage errors itself, with its own exit codes (0 or 2).
+        Err(e) => e.exit(),
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
+}

@@ -1,0 +1,7 @@
+//! One module per subcommand: its clap arguments and its `run` function.
+
+pub mod demo;
+pub mod eval;
+pub mod learn_clutter;
+pub mod motion;
+pub mod run;

@@ -1,0 +1,87 @@
+//! The command line's error type and its exit codes.
+
+use std::path::PathBuf;
+
+/// Result alias for the command line.
+pub type Result<T, E = AppError> = std::result::Result<T, E>;
+
+/// Everything that can stop a `track` command. Each variant names the file or value at fault.
+///
+/// Exit codes (also in `track --help`): 0 success, 1 a computation failed (for example the filter
+/// degenerated), 2 bad command-line arguments or settings, 3 bad input data (images, ground truth,
+/// video), 4 an output could not be written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum AppError {
+    /// A command-line value or configuration setting is invalid.
+    #[error("invalid value for {name}: {reason}")]
+    InvalidSetting {
+        /// The option or configuration key.
+        name: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// An input file or folder is missing, unreadable or malformed.
+    #[error("{}: {reason}", path.display())]
+    BadInput {
+        /// The offending file or folder.
+        path: PathBuf,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// An output could not be written.
+    #[error("cannot write {}: {source}", path.display())]
+    Write {
+        /// The output path.
+        path: PathBuf,
+        /// The underlying I/O error.
+        source: std::io::Error,
+    },
+    /// A computation failed (the library's own error, with its context).
+    #[error("{context}: {message}")]
+    Computation {
+        /// What was being computed.
+        context: String,
+        /// The library's error message.
+        message: String,
+    },
+    /// The command is not available yet.
+    #[error("`track {0}` is not implemented yet")]
+    NotImplemented(&'static str),
+}
+
+impl AppError {
+    /// The process exit code for this error (see the type's documentation).
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            AppError::Computation { .. } | AppError::NotImplemented(_) => 1,
+            AppError::InvalidSetting { .. } => 2,
+            AppError::BadInput { .. } => 3,
+            AppError::Write { .. } => 4,
+        }
+    }
+
+    /// Shorthand for [`AppError::InvalidSetting`].
+    pub fn setting(name: impl Into<String>, reason: impl Into<String>) -> Self {
+        AppError::InvalidSetting {
+            name: name.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Shorthand for [`AppError::BadInput`].
+    pub fn input(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
+        AppError::BadInput {
+            path: path.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Shorthand for [`AppError::Computation`] from any library error.
+    pub fn computation(context: impl Into<String>, error: impl std::fmt::Display) -> Self {
+        AppError::Computation {
+            context: context.into(),
+            message: error.to_string(),
+        }
+    }
+}

@@ -1,0 +1,16 @@
+//! The `track` command line: run the trackers on footage, evaluate them, render what they believe,
+//! learn clutter statistics and estimate motion.
+//!
+//! Everything the binary does is reachable from [`cli::try_main_from_args`], which returns a typed
+//! [`AppError`] instead of exiting, so tests drive the command line in-process.
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+pub mod cli;
+pub mod commands;
+pub mod error;
+pub mod output;
+
+pub use error::{AppError, Result};

@@ -1,0 +1,3 @@
+//! Particle-filter contour trackers composed from smc-core, motion-est, contour-obs and dbn-switch.
+//!
+//! Skeleton: filled in by the issue that owns this crate.
