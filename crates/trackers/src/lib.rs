@@ -1,3 +1,82 @@
-//! Particle-filter contour trackers composed from smc-core, motion-est, contour-obs and dbn-switch.
+//! Particle-filter contour trackers composed from the workspace's layers: `smc-core` (the filter),
+//! `motion-est` (robust affine motion, NCC patches), `contour-obs` (contours, measurement lines,
+//! likelihoods) and `dbn-switch` (hidden clutter, occlusion and status processes).
 //!
-//! Skeleton: filled in by the issue that owns this crate.
+//! Any proposal goes with any product of observation terms ([`TrackerConfig`]); the papers'
+//! trackers are named [`Preset`]s:
+//!
+//! | preset | paper | proposal | weight |
+//! |---|---|---|---|
+//! | `m1` | Odobez M1 (CONDENSATION) | Gaussian AR2 prior | p_sh (Eq. 19) |
+//! | `m2` | Odobez M2 | Gaussian AR2 prior | p_sh · p_c2 (Eq. 19, 22–23) |
+//! | `m3` | Odobez M3 | motion, Eq. 16 | p_sh · p_c2 · p_c1 · p(c_k\|c_{k−1}) / q = Eq. 24 |
+//! | `w-fixed` | Wu, one λ | Gaussian AR2 (affine) | Wu Eq. 1–6 |
+//! | `w-switch` | Wu §6.1 without HMM | prior, β switching | Wu Eq. 1–6 at λ̄_β |
+//! | `w-hmm` | Wu Fig. 5–6 | prior, {β, λ} HMM | Wu Eq. 1–6 at λ |
+//! | `w-occ` | Wu §5 | prior, {β, λ} HMM, γ walk | Wu Eq. 11–12 |
+//! | `w-eval` | Wu §6.3 | prior, {β, λ} HMM, {α, γ} HMM | Wu Eq. 11–12 |
+//! | `full` | neither | motion, Eq. 16, all hidden processes | Wu Eq. 11–12 · p_c2 · p_c1 · prior / q |
+//!
+//! # Example
+//! ```
+//! use trackers::{Frame, Preset, build};
+//! use contour_obs::Ellipse;
+//!
+//! // A bright disc of radius 20 on a dark background, moving 2 px right per frame.
+//! let (w, h) = (96, 72);
+//! let frame_at = |k: usize| -> Vec<f32> {
+//!     (0..w * h)
+//!         .map(|i| {
+//!             let (x, y) = ((i % w) as f64, (i / w) as f64);
+//!             let d = ((x - 40.0 - 2.0 * k as f64).powi(2) + (y - 36.0).powi(2)).sqrt();
+//!             if d < 20.0 { 200.0 } else { 40.0 }
+//!         })
+//!         .collect()
+//! };
+//! let mut tracker = build(Preset::M1.config(100, 7))?;
+//! let first = frame_at(0);
+//! let start = Ellipse { cx: 40.0, cy: 36.0, a: 20.0, b: 20.0, theta: 0.0 };
+//! tracker.init(Frame::new(w, h, &first)?, start)?;
+//! let mut last = None;
+//! for k in 1..6 {
+//!     let pixels = frame_at(k);
+//!     last = Some(tracker.update(Frame::new(w, h, &pixels)?)?);
+//! }
+//! let e = last.unwrap().ellipse;
+//! assert!((e.cx - 50.0).abs() < 2.0 && (e.cy - 36.0).abs() < 2.0);
+//! # Ok::<(), trackers::Error>(())
+//! ```
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+pub mod cluster;
+pub mod config;
+pub mod dynamics;
+pub mod error;
+pub mod frame;
+pub mod observation;
+pub mod particle;
+pub mod proposal;
+pub mod space;
+pub mod tracker;
+
+pub use config::{
+    ClutterMode, MotionSettings, OcclusionMode, PoseEstimator, Preset, ProposalKind, TrackerConfig,
+};
+pub use dynamics::{DynamicsSettings, NoiseKind};
+pub use error::{Error, Result};
+pub use frame::Frame;
+pub use observation::{ImplicitMotionSettings, LikelihoodSettings};
+pub use particle::Particle;
+pub use space::ShapeSpace;
+pub use tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, build};
+
+/// Builds a preset by name with `particles` particles and `seed`.
+///
+/// # Errors
+/// [`Error::UnknownPreset`] or an invalid configuration.
+pub fn build_preset(name: &str, particles: usize, seed: u64) -> Result<Box<dyn Tracker>> {
+    build(Preset::from_name(name)?.config(particles, seed))
+}

@@ -1,0 +1,439 @@
+//! Tracker configuration: any shape space, any proposal, any product of likelihood terms, any
+//! hidden switching processes — and the named presets of both papers.
+
+use dbn_switch::{ClutterConfig, LambdaModel, OcclusionConfig, StatusConfig};
+use serde::{Deserialize, Serialize};
+use smc_core::{FilterSettings, ResamplingScheme};
+
+use crate::dynamics::{DynamicsSettings, NoiseKind};
+use crate::observation::{ImplicitMotionSettings, LikelihoodSettings};
+use crate::space::ShapeSpace;
+use crate::{Error, Result};
+
+/// Settings of Odobez's motion proposal (Eq. 16) and of the motion estimates behind p_c1.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MotionSettings {
+    /// The robust estimator (Odobez §4.2).
+    pub estimator: motion_est::Settings,
+    /// Estimate a global intensity offset too (default false).
+    pub offset: bool,
+    /// Smallest number of clusters (Odobez: 20).
+    pub min_clusters: usize,
+    /// Clusters per particle (Odobez: 1/10).
+    pub clusters_per_particle: f64,
+    /// Lloyd iterations of the clustering (default 3).
+    pub cluster_iterations: usize,
+}
+
+impl Default for MotionSettings {
+    fn default() -> Self {
+        Self {
+            estimator: motion_est::Settings::default(),
+            offset: false,
+            min_clusters: 20,
+            clusters_per_particle: 0.1,
+            cluster_iterations: 3,
+        }
+    }
+}
+
+impl MotionSettings {
+    /// K = max(min_clusters, N · clusters_per_particle), at most N.
+    pub fn cluster_count(&self, n: usize) -> usize {
+        ((n as f64 * self.clusters_per_particle) as usize)
+            .max(self.min_clusters)
+            .clamp(1, n.max(1))
+    }
+}
+
+/// Which proposal draws the new particles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProposalKind {
+    /// The transition prior (bootstrap / CONDENSATION).
+    Prior,
+    /// Odobez's motion proposal N(α_{k−1} + α̇, Λ̂ + Λ_wp) (Eq. 16).
+    Motion,
+}
+
+/// How the clutter density λ of the particles is modelled.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ClutterMode {
+    /// One fixed λ per pixel.
+    Fixed {
+        /// Edges per pixel.
+        lambda: f64,
+    },
+    /// β switching (with λ | β fixed or Gaussian, per the config's `lambda_model`).
+    Switching(ClutterConfig),
+}
+
+/// How occlusion is modelled.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OcclusionMode {
+    /// No occlusion (γ = 0).
+    None,
+    /// γ as a Gaussian random walk (Wu Eq. 13).
+    RandomWalk(OcclusionConfig),
+    /// The status HMM {α, γ} (Wu §6.3).
+    Status(StatusConfig),
+}
+
+/// How the reported pose is computed from the particles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PoseEstimator {
+    /// The weighted mean of the states.
+    Mean,
+    /// The mean of the particles of the most probable clutter class β̂ (Wu §4).
+    ClassConditionalMean,
+}
+
+/// Everything that defines a tracker. Load from JSON or TOML, or start from a [`Preset`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrackerConfig {
+    /// A name for reports.
+    pub name: String,
+    /// Number of particles.
+    pub particles: usize,
+    /// Seed of every random draw.
+    pub seed: u64,
+    /// Shape space of the particles.
+    pub space: ShapeSpace,
+    /// Kinematic prior.
+    pub dynamics: DynamicsSettings,
+    /// Proposal.
+    pub proposal: ProposalKind,
+    /// Motion estimation settings (used by the motion proposal and p_c1).
+    #[serde(default)]
+    pub motion: MotionSettings,
+    /// Likelihood terms.
+    pub likelihood: LikelihoodSettings,
+    /// Clutter process.
+    pub clutter: ClutterMode,
+    /// Occlusion process.
+    pub occlusion: OcclusionMode,
+    /// Particle filter settings (resampling threshold, parallelism).
+    #[serde(default)]
+    pub filter: FilterSettings,
+    /// Resampling scheme.
+    #[serde(default)]
+    pub resampling: ResamplingScheme,
+    /// Pose estimator.
+    pub estimator: PoseEstimator,
+    /// Spread of the initial particles around the initial ellipse, as a fraction of the dynamics
+    /// noise (default 0.5).
+    #[serde(default = "default_init_spread")]
+    pub init_spread: f64,
+}
+
+fn default_init_spread() -> f64 {
+    0.5
+}
+
+impl TrackerConfig {
+    /// Checks every part.
+    ///
+    /// # Errors
+    /// The first invalid setting, as [`Error::InvalidSetting`] or the owning crate's error.
+    pub fn validate(&self) -> Result<()> {
+        if self.particles == 0 {
+            return Err(Error::InvalidSetting {
+                name: "particles",
+                reason: "must be at least 1".into(),
+            });
+        }
+        if !(self.init_spread.is_finite() && self.init_spread >= 0.0) {
+            return Err(Error::InvalidSetting {
+                name: "init_spread",
+                reason: format!("{} must be finite and non-negative", self.init_spread),
+            });
+        }
+        self.dynamics.validate()?;
+        self.likelihood.validate()?;
+        self.filter.validate()?;
+        self.motion.estimator.validate()?;
+        if !(self.motion.clusters_per_particle.is_finite()
+            && self.motion.clusters_per_particle >= 0.0)
+        {
+            return Err(Error::InvalidSetting {
+                name: "motion.clusters_per_particle",
+                reason: format!(
+                    "{} must be finite and non-negative",
+                    self.motion.clusters_per_particle
+                ),
+            });
+        }
+        match &self.clutter {
+            ClutterMode::Fixed { lambda } if !(lambda.is_finite() && *lambda > 0.0) => {
+                return Err(Error::InvalidSetting {
+                    name: "clutter.lambda",
+                    reason: format!("{lambda} must be finite and positive"),
+                });
+            }
+            ClutterMode::Switching(c) => c.validate()?,
+            ClutterMode::Fixed { .. } => {}
+        }
+        match &self.occlusion {
+            OcclusionMode::RandomWalk(c) => c.validate()?,
+            OcclusionMode::Status(c) => c.validate()?,
+            OcclusionMode::None => {}
+        }
+        if self.likelihood.clutter.is_none()
+            && (matches!(self.clutter, ClutterMode::Switching(_))
+                || !matches!(self.occlusion, OcclusionMode::None))
+        {
+            return Err(Error::InvalidSetting {
+                name: "likelihood.clutter",
+                reason: "clutter switching and occlusion need Wu's clutter likelihood".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Whether motion must be estimated every frame.
+    pub fn needs_motion(&self) -> bool {
+        self.proposal == ProposalKind::Motion || self.likelihood.motion_consistency
+    }
+}
+
+/// The named trackers of both papers, and the combination neither has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// Odobez M1: CONDENSATION, Gaussian AR2 prior as proposal, shape likelihood (Eq. 19).
+    M1,
+    /// Odobez M2: M1 with the implicit motion likelihood p_sh · p_c2 (Eq. 22–23).
+    M2,
+    /// Odobez M3: motion proposal (Eq. 16), Cauchy prior (Eq. 17), weight Eq. 24.
+    M3,
+    /// Wu: affine shape space, Poisson-clutter likelihood with one fixed λ.
+    WFixed,
+    /// Wu: β switching among the learnt λ̄ (no HMM, §6.1).
+    WSwitch,
+    /// Wu: the {β, λ} HMM (Fig. 5–6).
+    WHmm,
+    /// Wu: the {β, λ} HMM and occlusion γ (§5, Eq. 11–14).
+    WOcc,
+    /// Wu: the {β, λ} HMM and the status HMM {α, γ} (§6.3).
+    WEval,
+    /// Odobez's motion proposal and implicit likelihood with Wu's switching clutter, occlusion and
+    /// status processes.
+    Full,
+}
+
+impl Preset {
+    /// Every preset.
+    pub const ALL: [Preset; 9] = [
+        Preset::M1,
+        Preset::M2,
+        Preset::M3,
+        Preset::WFixed,
+        Preset::WSwitch,
+        Preset::WHmm,
+        Preset::WOcc,
+        Preset::WEval,
+        Preset::Full,
+    ];
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::M1 => "m1",
+            Preset::M2 => "m2",
+            Preset::M3 => "m3",
+            Preset::WFixed => "w-fixed",
+            Preset::WSwitch => "w-switch",
+            Preset::WHmm => "w-hmm",
+            Preset::WOcc => "w-occ",
+            Preset::WEval => "w-eval",
+            Preset::Full => "full",
+        }
+    }
+
+    /// Parses a command-line name.
+    ///
+    /// # Errors
+    /// [`Error::UnknownPreset`] listing the known names.
+    pub fn from_name(name: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name() == name)
+            .ok_or_else(|| Error::UnknownPreset {
+                name: name.to_owned(),
+                known: Self::ALL.map(Preset::name).join(", "),
+            })
+    }
+
+    /// The preset's configuration with `particles` particles and `seed`.
+    pub fn config(self, particles: usize, seed: u64) -> TrackerConfig {
+        let odobez_dynamics = DynamicsSettings {
+            noise: NoiseKind::Gaussian,
+            sigma_translation: 3.0,
+            sigma_scale: 0.01,
+            sigma_shape: 0.01,
+            ..DynamicsSettings::default()
+        };
+        let wu_dynamics = DynamicsSettings {
+            noise: NoiseKind::Gaussian,
+            sigma_translation: 3.0,
+            sigma_scale: 0.02,
+            sigma_shape: 0.01,
+            ..DynamicsSettings::default()
+        };
+        let shape = LikelihoodSettings {
+            shape: Some(Default::default()),
+            ..LikelihoodSettings::default()
+        };
+        let clutter_only = LikelihoodSettings {
+            clutter: Some(Default::default()),
+            ..LikelihoodSettings::default()
+        };
+        let fixed_beta = ClutterConfig {
+            lambda_model: LambdaModel::Fixed,
+            ..ClutterConfig::default()
+        };
+        let base = TrackerConfig {
+            name: self.name().to_owned(),
+            particles,
+            seed,
+            space: ShapeSpace::Odobez,
+            dynamics: odobez_dynamics,
+            proposal: ProposalKind::Prior,
+            motion: MotionSettings::default(),
+            likelihood: shape.clone(),
+            clutter: ClutterMode::Fixed { lambda: 0.0824 },
+            occlusion: OcclusionMode::None,
+            filter: FilterSettings::default(),
+            resampling: ResamplingScheme::Systematic,
+            estimator: PoseEstimator::Mean,
+            init_spread: default_init_spread(),
+        };
+        let wu = TrackerConfig {
+            space: ShapeSpace::Affine,
+            dynamics: wu_dynamics,
+            likelihood: clutter_only,
+            ..base.clone()
+        };
+        let implicit = Some(ImplicitMotionSettings::default());
+        match self {
+            Preset::M1 => base,
+            Preset::M2 => TrackerConfig {
+                likelihood: LikelihoodSettings {
+                    implicit_motion: implicit,
+                    ..shape
+                },
+                ..base
+            },
+            Preset::M3 => TrackerConfig {
+                dynamics: DynamicsSettings {
+                    noise: NoiseKind::Cauchy,
+                    ..odobez_dynamics
+                },
+                proposal: ProposalKind::Motion,
+                likelihood: LikelihoodSettings {
+                    implicit_motion: implicit,
+                    motion_consistency: true,
+                    ..shape
+                },
+                ..base
+            },
+            Preset::WFixed => wu,
+            Preset::WSwitch => TrackerConfig {
+                clutter: ClutterMode::Switching(fixed_beta),
+                estimator: PoseEstimator::ClassConditionalMean,
+                ..wu
+            },
+            Preset::WHmm => TrackerConfig {
+                clutter: ClutterMode::Switching(ClutterConfig::default()),
+                estimator: PoseEstimator::ClassConditionalMean,
+                ..wu
+            },
+            Preset::WOcc => TrackerConfig {
+                clutter: ClutterMode::Switching(ClutterConfig::default()),
+                occlusion: OcclusionMode::RandomWalk(OcclusionConfig::default()),
+                ..wu
+            },
+            Preset::WEval => TrackerConfig {
+                clutter: ClutterMode::Switching(ClutterConfig::default()),
+                occlusion: OcclusionMode::Status(StatusConfig::default()),
+                ..wu
+            },
+            Preset::Full => TrackerConfig {
+                dynamics: DynamicsSettings {
+                    noise: NoiseKind::Cauchy,
+                    ..odobez_dynamics
+                },
+                proposal: ProposalKind::Motion,
+                likelihood: LikelihoodSettings {
+                    implicit_motion: implicit,
+                    motion_consistency: true,
+                    clutter: Some(Default::default()),
+                    shape: None,
+                },
+                clutter: ClutterMode::Switching(ClutterConfig::default()),
+                occlusion: OcclusionMode::Status(StatusConfig::default()),
+                ..base
+            },
+        }
+    }
+}
+
+impl std::fmt::Display for Preset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Preset {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Self::from_name(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_preset_is_valid_and_round_trips_through_json() {
+        for p in Preset::ALL {
+            let c = p.config(200, 1);
+            c.validate().unwrap();
+            let json = serde_json::to_string(&c).unwrap();
+            let back: TrackerConfig = serde_json::from_str(&json).unwrap();
+            assert_eq!(back, c);
+            assert_eq!(Preset::from_name(p.name()).unwrap(), p);
+        }
+    }
+
+    #[test]
+    fn invalid_settings_are_rejected() {
+        let mut c = Preset::M1.config(0, 1);
+        assert!(matches!(
+            c.validate(),
+            Err(Error::InvalidSetting {
+                name: "particles",
+                ..
+            })
+        ));
+        c.particles = 10;
+        c.dynamics.sigma_translation = f64::NAN;
+        assert!(c.validate().is_err());
+        let mut w = Preset::WHmm.config(10, 1);
+        if let ClutterMode::Switching(cfg) = &mut w.clutter {
+            cfg.transition[0] = vec![0.5, 0.4, 0.3];
+        }
+        assert!(matches!(w.validate(), Err(Error::Switching(_))));
+        assert!(matches!(
+            Preset::from_name("m9"),
+            Err(Error::UnknownPreset { .. })
+        ));
+    }
+}

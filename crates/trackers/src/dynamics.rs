@@ -1,0 +1,343 @@
+//! The transition prior p(c_k | c_{k−1}): second-order auto-regressive kinematics (Odobez Eq. 17;
+//! Wu's "constant acceleration" model) and the hidden switching processes of Wu et al.
+//!
+//! Kinematics, per used component j of the shape space:
+//! x_{k,j} = x_{k−1,j} + ρ (x_{k−1,j} − x_{k−2,j}) + σ_j ε, with ε standard Gaussian or standard
+//! Cauchy (Odobez's ρ_c(x, σ²) = σ / π(x² + σ²)). ρ = 1 is Odobez Eq. 17 exactly
+//! (2α_k − α_{k−1}); it is the second-order model that Blake & Isard's shape-space trackers (and Wu)
+//! call "constant acceleration": the acceleration is white noise.
+//!
+//! The noise scale of the size components is relative (σ_s · s), so that Odobez's Table 1 pairs
+//! (σ_T, σ_s) = (2 px, 0.01) keep their meaning whatever the target's size: Odobez's reference
+//! region has s ≈ 1, ours is the unit circle, so s is in pixels.
+
+use dbn_switch::{ClutterHmm, OcclusionProcess, OcclusionState, StatusHmm, StatusState};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::particle::Particle;
+use crate::space::{STATE_SLOTS, ShapeSpace, StateVector};
+use crate::{Error, Result};
+
+/// The distribution of the kinematic noise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseKind {
+    /// Gaussian (CONDENSATION's prior and proposal, Odobez M1/M2; Wu).
+    Gaussian,
+    /// Cauchy, heavy-tailed for abrupt changes (Odobez Eq. 17, M3).
+    Cauchy,
+}
+
+impl NoiseKind {
+    /// Draws one standard variate.
+    pub fn sample<R: Rng + ?Sized>(self, rng: &mut R) -> f64 {
+        match self {
+            NoiseKind::Gaussian => StandardNormal.sample(rng),
+            NoiseKind::Cauchy => {
+                // Inverse CDF; u in (0, 1) excludes the poles of tan at ±π/2.
+                let u: f64 = rng.random_range(f64::EPSILON..1.0 - f64::EPSILON);
+                (std::f64::consts::PI * (u - 0.5)).tan()
+            }
+        }
+    }
+
+    /// log density of `x` under scale `sigma`.
+    pub fn log_density(self, x: f64, sigma: f64) -> f64 {
+        match self {
+            NoiseKind::Gaussian => {
+                let z = x / sigma;
+                -0.5 * z * z - sigma.ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
+            }
+            NoiseKind::Cauchy => {
+                sigma.ln() - std::f64::consts::PI.ln() - (x * x + sigma * sigma).ln()
+            }
+        }
+    }
+}
+
+/// Settings of the kinematic prior.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DynamicsSettings {
+    /// Noise distribution. Default Gaussian.
+    pub noise: NoiseKind,
+    /// σ_T: translation noise in pixels per frame. Default 3 px (Odobez D2).
+    pub sigma_translation: f64,
+    /// σ_s: scale noise relative to the current scale. Default 0.01 (Odobez Table 1).
+    pub sigma_scale: f64,
+    /// Noise on the shape (Odobez's aspect ratio e, relative; the off-diagonal terms of Wu's A,
+    /// relative to the scale). Default 0.01.
+    pub sigma_shape: f64,
+    /// ρ, the share of the last velocity carried into the prediction. Default 1 (Eq. 17).
+    pub velocity_retention: f64,
+    /// Smallest mean radius a state may take, pixels. Default 2.
+    pub min_scale: f64,
+}
+
+impl Default for DynamicsSettings {
+    fn default() -> Self {
+        Self {
+            noise: NoiseKind::Gaussian,
+            sigma_translation: 3.0,
+            sigma_scale: 0.01,
+            sigma_shape: 0.01,
+            velocity_retention: 1.0,
+            min_scale: 2.0,
+        }
+    }
+}
+
+impl DynamicsSettings {
+    /// Checks that every σ is finite and positive, ρ in [0, 1] and the minimum scale positive.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] naming the field.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [
+            ("dynamics.sigma_translation", self.sigma_translation),
+            ("dynamics.sigma_scale", self.sigma_scale),
+            ("dynamics.sigma_shape", self.sigma_shape),
+            ("dynamics.min_scale", self.min_scale),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::InvalidSetting {
+                    name,
+                    reason: format!("{v} must be finite and positive"),
+                });
+            }
+        }
+        if !(0.0..=1.0).contains(&self.velocity_retention) {
+            return Err(Error::InvalidSetting {
+                name: "dynamics.velocity_retention",
+                reason: format!("{} must be in [0, 1]", self.velocity_retention),
+            });
+        }
+        Ok(())
+    }
+
+    /// The per-component noise scales at state `x`.
+    pub fn sigmas(&self, space: ShapeSpace, x: &StateVector) -> StateVector {
+        let s = space.scale(x).max(self.min_scale);
+        match space {
+            ShapeSpace::Odobez => [
+                self.sigma_translation,
+                self.sigma_translation,
+                self.sigma_scale * s,
+                self.sigma_shape * x[3].abs().max(0.25),
+                1.0,
+                1.0,
+            ],
+            ShapeSpace::Affine => [
+                self.sigma_scale * s,
+                self.sigma_shape * s,
+                self.sigma_shape * s,
+                self.sigma_scale * s,
+                self.sigma_translation,
+                self.sigma_translation,
+            ],
+        }
+    }
+
+    /// The deterministic AR2 prediction x_{k−1} + ρ (x_{k−1} − x_{k−2}).
+    pub fn predict(&self, now: &StateVector, prev: &StateVector) -> StateVector {
+        let mut out = [0.0; STATE_SLOTS];
+        for j in 0..STATE_SLOTS {
+            out[j] = now[j] + self.velocity_retention * (now[j] - prev[j]);
+        }
+        out
+    }
+}
+
+/// How the clutter density λ of a particle evolves.
+#[derive(Debug, Clone)]
+pub enum ClutterProcess {
+    /// One fixed λ (edges per pixel) for every particle: Wu's single-model tracker.
+    Fixed(f64),
+    /// β switching with λ | β fixed or Gaussian (Wu §4, Fig. 5–6).
+    Switching(ClutterHmm),
+}
+
+/// How the occlusion γ (and status α) of a particle evolves.
+#[derive(Debug, Clone)]
+pub enum OcclusionModel {
+    /// No occlusion: γ = 0.
+    None,
+    /// Gaussian random walk with boundary mass (Wu Eq. 13).
+    RandomWalk(OcclusionProcess),
+    /// The status HMM {α, γ} (Wu §5, Fig. 9).
+    Status(StatusHmm),
+}
+
+/// The full transition prior of a tracker's particles.
+#[derive(Debug, Clone)]
+pub struct TrackerDynamics {
+    /// Shape space of the kinematic state.
+    pub space: ShapeSpace,
+    /// Kinematic settings.
+    pub settings: DynamicsSettings,
+    /// Clutter process.
+    pub clutter: ClutterProcess,
+    /// Occlusion process.
+    pub occlusion: OcclusionModel,
+}
+
+impl TrackerDynamics {
+    /// Draws the hidden variables of the next step from their transitions (Wu Fig. 6 steps 2b–2c
+    /// and Eq. 13). Every proposal of this crate draws them this way, so their prior and proposal
+    /// densities cancel in the weight (Odobez Eq. 3) and are never evaluated.
+    pub fn sample_hidden<R: Rng + ?Sized>(
+        &self,
+        previous: &Particle,
+        next: &mut Particle,
+        rng: &mut R,
+    ) {
+        next.clutter = match &self.clutter {
+            ClutterProcess::Fixed(lambda) => dbn_switch::ClutterState {
+                beta: previous.clutter.beta,
+                lambda: *lambda,
+            },
+            ClutterProcess::Switching(hmm) => hmm.sample_next(&previous.clutter, rng),
+        };
+        next.status = match &self.occlusion {
+            OcclusionModel::None => previous.status,
+            OcclusionModel::RandomWalk(walk) => StatusState {
+                alpha: previous.status.alpha,
+                gamma: walk
+                    .sample_next(
+                        &OcclusionState {
+                            gamma: previous.status.gamma,
+                        },
+                        rng,
+                    )
+                    .gamma,
+            },
+            OcclusionModel::Status(hmm) => hmm.sample_next(&previous.status, rng),
+        };
+    }
+
+    /// Draws the kinematic part x_k ~ p(x_k | x_{k−1}, x_{k−2}).
+    pub fn sample_kinematics<R: Rng + ?Sized>(
+        &self,
+        previous: &Particle,
+        rng: &mut R,
+    ) -> StateVector {
+        let mean = self.settings.predict(&previous.now, &previous.prev);
+        let sigma = self.settings.sigmas(self.space, &previous.now);
+        let mut x = mean;
+        for j in 0..self.space.dim() {
+            x[j] += sigma[j] * self.settings.noise.sample(rng);
+        }
+        self.space.clamp(&mut x, self.settings.min_scale);
+        x
+    }
+
+    /// log p(x_k | x_{k−1}, x_{k−2}) of the kinematic part (Odobez Eq. 17 for Cauchy noise).
+    pub fn log_kinematic_density(&self, previous: &Particle, next: &Particle) -> f64 {
+        let mean = self.settings.predict(&previous.now, &previous.prev);
+        let sigma = self.settings.sigmas(self.space, &previous.now);
+        (0..self.space.dim())
+            .map(|j| {
+                self.settings
+                    .noise
+                    .log_density(next.now[j] - mean[j], sigma[j])
+            })
+            .sum()
+    }
+}
+
+impl smc_core::Dynamics for TrackerDynamics {
+    type State = Particle;
+
+    fn sample<R: Rng + ?Sized>(&self, previous: &Particle, rng: &mut R) -> Particle {
+        let mut next = *previous;
+        next.prev = previous.now;
+        next.now = self.sample_kinematics(previous, rng);
+        self.sample_hidden(previous, &mut next, rng);
+        next
+    }
+
+    /// The kinematic density only: the hidden variables are drawn from their own transitions by
+    /// every proposal, so their densities cancel (see [`TrackerDynamics::sample_hidden`]).
+    fn log_density(&self, previous: &Particle, next: &Particle) -> f64 {
+        self.log_kinematic_density(previous, next)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::particle::default_status;
+    use rand::SeedableRng;
+    use rand_pcg::Pcg64Mcg;
+
+    fn dynamics(noise: NoiseKind) -> TrackerDynamics {
+        TrackerDynamics {
+            space: ShapeSpace::Odobez,
+            settings: DynamicsSettings {
+                noise,
+                ..DynamicsSettings::default()
+            },
+            clutter: ClutterProcess::Fixed(0.05),
+            occlusion: OcclusionModel::None,
+        }
+    }
+
+    #[test]
+    fn densities_integrate_to_one() {
+        // Trapezoid rule over ±2000σ; the Cauchy tail beyond holds 2/(π·2000) ≈ 3e-4 of the mass.
+        for (kind, tol) in [(NoiseKind::Gaussian, 1e-9), (NoiseKind::Cauchy, 5e-4)] {
+            let sigma = 1.7;
+            let h = 0.01;
+            let mut total = 0.0;
+            let mut x = -2000.0 * sigma;
+            while x < 2000.0 * sigma {
+                total += h * kind.log_density(x, sigma).exp();
+                x += h;
+            }
+            assert!((total - 1.0).abs() < tol, "{kind:?}: {total}");
+        }
+    }
+
+    #[test]
+    fn gaussian_kinematics_have_the_ar2_mean_and_stated_spread() {
+        let d = dynamics(NoiseKind::Gaussian);
+        let p = Particle {
+            now: [100.0, 50.0, 20.0, 1.0, 0.0, 0.0],
+            prev: [98.0, 51.0, 20.0, 1.0, 0.0, 0.0],
+            ..Particle::at_rest(
+                [0.0; 6],
+                dbn_switch::ClutterState {
+                    beta: 0,
+                    lambda: 0.05,
+                },
+                default_status(),
+            )
+        };
+        let mut rng = Pcg64Mcg::seed_from_u64(7);
+        let n = 20_000;
+        let (mut m, mut v) = (0.0, 0.0);
+        for _ in 0..n {
+            let x = d.sample_kinematics(&p, &mut rng);
+            m += x[0];
+            v += (x[0] - 102.0).powi(2);
+        }
+        m /= n as f64;
+        v /= n as f64;
+        // Standard error of the mean: 3/√20000 ≈ 0.021; 5 standard errors.
+        assert!((m - 102.0).abs() < 0.11, "mean {m}");
+        // Relative standard error of a variance estimate: √(2/n) = 1%; 5 standard errors.
+        assert!((v / 9.0 - 1.0).abs() < 0.05, "variance {v}");
+    }
+
+    #[test]
+    fn cauchy_median_absolute_deviation_is_sigma() {
+        let kind = NoiseKind::Cauchy;
+        let mut rng = Pcg64Mcg::seed_from_u64(3);
+        let mut xs: Vec<f64> = (0..20_001).map(|_| kind.sample(&mut rng).abs()).collect();
+        xs.sort_by(f64::total_cmp);
+        // The median of |X| for a standard Cauchy is 1; its standard error here is ≈ 0.011.
+        assert!((xs[10_000] - 1.0).abs() < 0.05, "{}", xs[10_000]);
+    }
+}

@@ -1,0 +1,278 @@
+//! Odobez's motion proposal (Eq. 16): q(α_k | c_{k−1}, z_{1:k}) = N(α_k; α_{k−1} + α̇, Λ̂ + Λ_wp),
+//! with the state derivative α̇ and its covariance from the robust affine motion of the particle's
+//! cluster (Eq. 13–15).
+
+use nalgebra::{Matrix2, Matrix6, SMatrix, Vector6};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::dynamics::TrackerDynamics;
+use crate::particle::Particle;
+use crate::space::{STATE_SLOTS, ShapeSpace, StateVector};
+
+/// The motion of one cluster, as a Gaussian over the state increment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClusterMotion {
+    /// Mean state increment α̇ (unused slots zero).
+    pub derivative: StateVector,
+    /// Lower Cholesky factor of Λ = Λ̂ + Λ_wp over the used dimensions (identity elsewhere).
+    pub chol: Matrix6<f64>,
+    /// log det of the Cholesky factor (used dimensions).
+    pub log_det_chol: f64,
+    /// Whether the motion came from a converged estimate (false: fallback, see
+    /// [`ClusterMotion::fallback`]).
+    pub estimated: bool,
+}
+
+impl ClusterMotion {
+    /// Builds the Gaussian from an increment and its covariance (used dimensions of `space`),
+    /// adding the process noise `sigmas` on the diagonal. Returns `None` when the covariance is not
+    /// positive definite or not finite.
+    pub fn new(
+        space: ShapeSpace,
+        derivative: StateVector,
+        covariance: &Matrix6<f64>,
+        sigmas: &StateVector,
+        estimated: bool,
+    ) -> Option<Self> {
+        let d = space.dim();
+        let mut lambda = Matrix6::identity();
+        for r in 0..d {
+            for c in 0..d {
+                lambda[(r, c)] = covariance[(r, c)];
+            }
+            lambda[(r, r)] += sigmas[r] * sigmas[r];
+        }
+        if lambda.iter().any(|v| !v.is_finite()) || derivative.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let chol = lambda.cholesky()?.l();
+        let log_det_chol = (0..d).map(|i| chol[(i, i)].ln()).sum();
+        Some(Self {
+            derivative,
+            chol,
+            log_det_chol,
+            estimated,
+        })
+    }
+
+    /// The proposal used when a cluster's motion cannot be estimated (region outside the image,
+    /// no texture): the AR2 prediction of the cluster mean as increment, process noise only. This
+    /// keeps the tracker running where Odobez's proposal has nothing to say.
+    pub fn fallback(
+        dynamics: &TrackerDynamics,
+        mean_now: &StateVector,
+        mean_prev: &StateVector,
+    ) -> Self {
+        let space = dynamics.space;
+        let pred = dynamics.settings.predict(mean_now, mean_prev);
+        let mut derivative = [0.0; STATE_SLOTS];
+        for j in 0..space.dim() {
+            derivative[j] = pred[j] - mean_now[j];
+        }
+        let sigmas = dynamics.settings.sigmas(space, mean_now);
+        let mut chol = Matrix6::identity();
+        for j in 0..space.dim() {
+            chol[(j, j)] = sigmas[j];
+        }
+        let log_det_chol = (0..space.dim()).map(|j| sigmas[j].ln()).sum();
+        Self {
+            derivative,
+            chol,
+            log_det_chol,
+            estimated: false,
+        }
+    }
+
+    /// log N(x; mean, Λ) over the used dimensions.
+    pub fn log_density(&self, space: ShapeSpace, mean: &StateVector, x: &StateVector) -> f64 {
+        let d = space.dim();
+        let mut diff = Vector6::zeros();
+        for j in 0..d {
+            diff[j] = x[j] - mean[j];
+        }
+        let Some(z) = self.chol.solve_lower_triangular(&diff) else {
+            return f64::NEG_INFINITY;
+        };
+        let q: f64 = (0..d).map(|j| z[j] * z[j]).sum();
+        -0.5 * q - self.log_det_chol - 0.5 * d as f64 * (2.0 * std::f64::consts::PI).ln()
+    }
+}
+
+/// The state increment and its covariance implied by an affine motion `[a1..a6]` (Odobez Eq. 13,
+/// origin at the state's centre) with covariance `cov`, for a state `x` of `space`.
+///
+/// Odobez space: Eq. 15 (via [`motion_est::odobez_state_derivative`]). Affine space: the motion
+/// maps the posed contour p = A r + t to p + d(p − t), so ΔA = M A and Δt = (a1, a4), with
+/// M = [[a2, a3], [a5, a6]]; the map is linear in the parameters and the covariance is J Σ Jᵀ.
+///
+/// # Errors
+/// The motion crate's error for non-finite input or a non-positive scale.
+pub fn state_increment(
+    space: ShapeSpace,
+    x: &StateVector,
+    params: &[f64; 6],
+    cov: &Matrix6<f64>,
+) -> motion_est::Result<(StateVector, Matrix6<f64>)> {
+    match space {
+        ShapeSpace::Odobez => {
+            let (d, c) = motion_est::odobez_state_derivative(params, cov, x[2], x[3])?;
+            let mut out = Matrix6::zeros();
+            out.fixed_view_mut::<4, 4>(0, 0).copy_from(&c);
+            Ok(([d[0], d[1], d[2], d[3], 0.0, 0.0], out))
+        }
+        ShapeSpace::Affine => {
+            let a = Matrix2::new(x[0], x[1], x[2], x[3]);
+            // Row order of the state: a11, a12, a21, a22, t1, t2; columns: a1..a6.
+            let mut j = SMatrix::<f64, 6, 6>::zeros();
+            // ΔA11 = a2 A11 + a3 A21, ΔA12 = a2 A12 + a3 A22.
+            j[(0, 1)] = a[(0, 0)];
+            j[(0, 2)] = a[(1, 0)];
+            j[(1, 1)] = a[(0, 1)];
+            j[(1, 2)] = a[(1, 1)];
+            // ΔA21 = a5 A11 + a6 A21, ΔA22 = a5 A12 + a6 A22.
+            j[(2, 4)] = a[(0, 0)];
+            j[(2, 5)] = a[(1, 0)];
+            j[(3, 4)] = a[(0, 1)];
+            j[(3, 5)] = a[(1, 1)];
+            j[(4, 0)] = 1.0;
+            j[(5, 3)] = 1.0;
+            let p = Vector6::from_row_slice(params);
+            let d = j * p;
+            Ok((
+                [d[0], d[1], d[2], d[3], d[4], d[5]],
+                j * cov * j.transpose(),
+            ))
+        }
+    }
+}
+
+/// Odobez's motion proposal over a set of cluster motions; particle i uses the cluster stored in
+/// its `cluster` field. The hidden variables are drawn from their transitions
+/// ([`TrackerDynamics::sample_hidden`]).
+#[derive(Debug, Clone, Copy)]
+pub struct MotionProposal<'a> {
+    /// The prior, for the hidden variables and the shape space.
+    pub dynamics: &'a TrackerDynamics,
+    /// One motion per cluster.
+    pub clusters: &'a [ClusterMotion],
+}
+
+impl MotionProposal<'_> {
+    fn cluster(&self, p: &Particle) -> Option<&ClusterMotion> {
+        self.clusters.get(p.cluster as usize)
+    }
+
+    /// The proposal mean α_{k−1} + α̇ for a particle.
+    fn mean(&self, previous: &Particle, motion: &ClusterMotion) -> StateVector {
+        let mut m = previous.now;
+        for j in 0..self.dynamics.space.dim() {
+            m[j] += motion.derivative[j];
+        }
+        m
+    }
+}
+
+impl smc_core::Proposal for MotionProposal<'_> {
+    type State = Particle;
+
+    fn sample<R: Rng + ?Sized>(&self, _index: usize, previous: &Particle, rng: &mut R) -> Particle {
+        let mut next = *previous;
+        next.prev = previous.now;
+        match self.cluster(previous) {
+            Some(motion) => {
+                let mean = self.mean(previous, motion);
+                let d = self.dynamics.space.dim();
+                let mut z = Vector6::zeros();
+                for j in 0..d {
+                    z[j] = StandardNormal.sample(rng);
+                }
+                let e = motion.chol * z;
+                next.now = mean;
+                for j in 0..d {
+                    next.now[j] += e[j];
+                }
+                self.dynamics
+                    .space
+                    .clamp(&mut next.now, self.dynamics.settings.min_scale);
+            }
+            None => next.now = self.dynamics.sample_kinematics(previous, rng),
+        }
+        self.dynamics.sample_hidden(previous, &mut next, rng);
+        next
+    }
+
+    fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
+        match self.cluster(previous) {
+            Some(motion) => {
+                motion.log_density(self.dynamics.space, &self.mean(previous, motion), &next.now)
+            }
+            None => self.dynamics.log_kinematic_density(previous, next),
+        }
+    }
+}
+
+/// log p_c1(α̂_k, α_k) = log N(α̂_k; α_k, Λ̂_k) (Odobez Eq. 21) for a propagated particle, from the
+/// motion of its cluster; 0 when the particle has no cluster. Numerically the same Gaussian as the
+/// motion proposal, which is why it cancels against q in Eq. 24.
+pub fn log_motion_consistency(space: ShapeSpace, clusters: &[ClusterMotion], p: &Particle) -> f64 {
+    match clusters.get(p.cluster as usize) {
+        Some(motion) => {
+            let mut mean = p.prev;
+            for j in 0..space.dim() {
+                mean[j] += motion.derivative[j];
+            }
+            motion.log_density(space, &mean, &p.now)
+        }
+        None => 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn affine_increment_matches_a_direct_warp() {
+        // A pose, an affine motion about its centre; compare the increment with warping points.
+        let x = [20.0, 3.0, -2.0, 15.0, 100.0, 80.0];
+        let params = [1.5, 0.02, -0.01, -0.7, 0.015, 0.03];
+        let (d, _) = state_increment(ShapeSpace::Affine, &x, &params, &Matrix6::zeros()).unwrap();
+        for r in [[1.0, 0.0], [0.0, 1.0], [0.6, -0.8]] {
+            let p = [
+                x[0] * r[0] + x[1] * r[1] + x[4],
+                x[2] * r[0] + x[3] * r[1] + x[5],
+            ];
+            let (rx, ry) = (p[0] - x[4], p[1] - x[5]);
+            let warped = [
+                p[0] + params[0] + params[1] * rx + params[2] * ry,
+                p[1] + params[3] + params[4] * rx + params[5] * ry,
+            ];
+            let y: Vec<f64> = x.iter().zip(&d).map(|(a, b)| a + b).collect();
+            let q = [
+                y[0] * r[0] + y[1] * r[1] + y[4],
+                y[2] * r[0] + y[3] * r[1] + y[5],
+            ];
+            assert!((q[0] - warped[0]).abs() < 1e-12 && (q[1] - warped[1]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn gaussian_density_matches_the_closed_form_for_a_diagonal_covariance() {
+        let mut cov = Matrix6::zeros();
+        cov[(0, 0)] = 4.0;
+        cov[(1, 1)] = 1.0;
+        let m = ClusterMotion::new(
+            ShapeSpace::Odobez,
+            [0.0; 6],
+            &cov,
+            &[0.0, 0.0, 1.0, 1.0, 0.0, 0.0],
+            true,
+        )
+        .unwrap();
+        let x = [2.0, -1.0, 0.5, 0.0, 0.0, 0.0];
+        let expected =
+            -0.5 * (1.0 + 1.0 + 0.25) - (2.0f64).ln() - 2.0 * (2.0 * std::f64::consts::PI).ln();
+        assert!((m.log_density(ShapeSpace::Odobez, &[0.0; 6], &x) - expected).abs() < 1e-12);
+    }
+}

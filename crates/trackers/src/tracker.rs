@@ -1,0 +1,495 @@
+//! The tracker: an object-safe `init` / `update` interface in the spirit of OpenCV's trackers,
+//! and the particle tracker that implements every preset.
+
+use std::time::Instant;
+
+use contour_obs::Ellipse;
+use dbn_switch::{
+    ClutterEstimate, ClutterHmm, ClutterState, OcclusionProcess, StatusEstimate, StatusHmm,
+    StatusState,
+};
+use motion_est::{MotionEstimator, Pyramid, Region, Workspace};
+use rand_distr::{Distribution, StandardNormal};
+use smc_core::{Bootstrap, ParticleFilter, ParticleSet, StepDiagnostics};
+
+use crate::cluster::{Clustering, cluster_particles};
+use crate::config::{ClutterMode, OcclusionMode, PoseEstimator, ProposalKind, TrackerConfig};
+use crate::dynamics::{ClutterProcess, OcclusionModel, TrackerDynamics};
+use crate::frame::Frame;
+use crate::observation::{FrameObservation, LikelihoodModel};
+use crate::particle::{Particle, default_status};
+use crate::proposal::{ClusterMotion, MotionProposal, state_increment};
+use crate::space::{STATE_SLOTS, StateVector, pose_box};
+use crate::{Error, Result};
+
+/// What a tracker reports for one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// Frame index (0 = the initialisation frame).
+    pub frame: usize,
+    /// The estimated contour as an ellipse.
+    pub ellipse: Ellipse,
+    /// Its axis-aligned box (x, y, w, h).
+    pub bbox: [f64; 4],
+    /// The estimated shape-space state.
+    pub state: StateVector,
+    /// Effective sample size after weighting (N at the initialisation frame).
+    pub ess: f64,
+    /// The particle filter's diagnostics of this step (`None` at initialisation).
+    pub diagnostics: Option<StepDiagnostics>,
+    /// β̂, its class probabilities and λ̂ (`None` without clutter switching).
+    pub clutter: Option<ClutterEstimate>,
+    /// γ̂ = E[γ] (Wu Eq. 14), `None` without an occlusion model.
+    pub gamma: Option<f64>,
+    /// α̂ and its probabilities (`None` without the status HMM).
+    pub status: Option<StatusEstimate>,
+    /// Number of motion clusters whose motion was estimated, and how many fell back to the prior
+    /// prediction (both 0 without motion).
+    pub motion_clusters: (usize, usize),
+    /// Wall time of the update, milliseconds.
+    pub millis: f64,
+}
+
+/// A weighted particle, for drawing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WeightedEllipse {
+    /// The particle's contour.
+    pub ellipse: Ellipse,
+    /// Its normalised weight.
+    pub weight: f64,
+}
+
+/// An object tracker: initialise on a frame, then update frame by frame. Object-safe, so an
+/// application can pick the tracker at run time (`Box<dyn Tracker>`).
+pub trait Tracker: Send {
+    /// The tracker's name (its preset or configuration name).
+    fn name(&self) -> &str;
+
+    /// Its configuration.
+    fn config(&self) -> &TrackerConfig;
+
+    /// Starts tracking `ellipse` on `frame` (frame 0).
+    ///
+    /// # Errors
+    /// An invalid frame or ellipse.
+    fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate>;
+
+    /// Processes the next frame.
+    ///
+    /// # Errors
+    /// [`Error::NotInitialised`], a frame of another size, or a degenerate filter.
+    fn update(&mut self, frame: Frame<'_>) -> Result<Estimate>;
+
+    /// The `max` most heavily weighted particles, heaviest first.
+    fn particles(&self, max: usize) -> Vec<WeightedEllipse>;
+}
+
+/// Builds the tracker a configuration describes.
+///
+/// # Errors
+/// An invalid configuration.
+pub fn build(config: TrackerConfig) -> Result<Box<dyn Tracker>> {
+    Ok(Box::new(ParticleTracker::new(config)?))
+}
+
+/// The particle-filter tracker behind every preset.
+#[derive(Debug)]
+pub struct ParticleTracker {
+    config: TrackerConfig,
+    dynamics: TrackerDynamics,
+    likelihood: LikelihoodModel,
+    filter: ParticleFilter<Particle>,
+    set: Option<ParticleSet<Particle>>,
+    motion: MotionEstimator,
+    pyramid_prev: Pyramid,
+    pyramid_now: Pyramid,
+    motion_workspace: Workspace,
+    clustering: Clustering,
+    clusters: Vec<ClusterMotion>,
+    previous: Vec<f32>,
+    size: (usize, usize),
+    frame: usize,
+}
+
+impl ParticleTracker {
+    /// A tracker for `config`.
+    ///
+    /// # Errors
+    /// An invalid configuration.
+    pub fn new(config: TrackerConfig) -> Result<Self> {
+        config.validate()?;
+        let clutter = match &config.clutter {
+            ClutterMode::Fixed { lambda } => ClutterProcess::Fixed(*lambda),
+            ClutterMode::Switching(c) => ClutterProcess::Switching(ClutterHmm::new(c)?),
+        };
+        let occlusion = match &config.occlusion {
+            OcclusionMode::None => OcclusionModel::None,
+            OcclusionMode::RandomWalk(c) => OcclusionModel::RandomWalk(OcclusionProcess::new(c)?),
+            OcclusionMode::Status(c) => OcclusionModel::Status(StatusHmm::new(c)?),
+        };
+        Ok(Self {
+            dynamics: TrackerDynamics {
+                space: config.space,
+                settings: config.dynamics,
+                clutter,
+                occlusion,
+            },
+            likelihood: LikelihoodModel::new(config.space, &config.likelihood)?,
+            filter: ParticleFilter::new(config.filter.clone())?,
+            motion: MotionEstimator::new(config.motion.estimator)?,
+            set: None,
+            pyramid_prev: Pyramid::new(),
+            pyramid_now: Pyramid::new(),
+            motion_workspace: Workspace::new(),
+            clustering: Clustering::default(),
+            clusters: Vec::new(),
+            previous: Vec::new(),
+            size: (0, 0),
+            frame: 0,
+            config,
+        })
+    }
+
+    fn initial_hidden(&self, index: usize) -> (ClutterState, StatusState) {
+        let mut rng = smc_core::rng::stream_rng(self.config.seed, u64::MAX, index as u64);
+        let clutter = match &self.dynamics.clutter {
+            ClutterProcess::Fixed(lambda) => ClutterState {
+                beta: 0,
+                lambda: *lambda,
+            },
+            ClutterProcess::Switching(hmm) => hmm.sample_initial(&mut rng),
+        };
+        let status = match &self.dynamics.occlusion {
+            OcclusionModel::None => default_status(),
+            OcclusionModel::RandomWalk(walk) => StatusState {
+                gamma: walk.initial().gamma,
+                ..default_status()
+            },
+            OcclusionModel::Status(hmm) => hmm.sample_initial(&mut rng),
+        };
+        (clutter, status)
+    }
+
+    /// Clusters the (resampled) particles and estimates each cluster's motion from the previous
+    /// frame to the current one (Odobez §5).
+    fn estimate_cluster_motions(&mut self, frame: &Frame<'_>) -> Result<(usize, usize)> {
+        let Some(set) = self.set.as_mut() else {
+            return Err(Error::NotInitialised);
+        };
+        let space = self.config.space;
+        std::mem::swap(&mut self.pyramid_prev, &mut self.pyramid_now);
+        self.motion
+            .build_pyramid_into(frame.image_view()?, &mut self.pyramid_now)?;
+        let k = self.config.motion.cluster_count(set.len());
+        cluster_particles(
+            space,
+            set.states_mut(),
+            k,
+            self.config.motion.cluster_iterations,
+            &mut self.clustering,
+        );
+        // The mean previous state of each cluster, for the fallback prediction.
+        let mut prev_means = vec![[0.0; STATE_SLOTS]; k];
+        for p in set.states() {
+            let c = p.cluster as usize;
+            for j in 0..STATE_SLOTS {
+                prev_means[c][j] += p.prev[j];
+            }
+        }
+        let spec =
+            motion_est::ModelSpec::new(motion_est::MotionModel::Affine, self.config.motion.offset);
+        self.clusters.clear();
+        let mut failures = 0;
+        for (c, mean) in self.clustering.means.iter().enumerate() {
+            let size = self.clustering.sizes[c].max(1) as f64;
+            let mean_prev = prev_means[c].map(|v| v / size);
+            let pose = space.pose(mean);
+            let sigmas = self.dynamics.settings.sigmas(space, mean);
+            let motion = pose.to_ellipse().and_then(|e| {
+                let region = Region::Ellipse(motion_est::Ellipse {
+                    cx: e.cx,
+                    cy: e.cy,
+                    a: e.a,
+                    b: e.b,
+                    theta: e.theta,
+                });
+                let est = self
+                    .motion
+                    .estimate(
+                        &self.pyramid_prev,
+                        &self.pyramid_now,
+                        &region,
+                        spec,
+                        Some([e.cx, e.cy]),
+                        &mut self.motion_workspace,
+                    )
+                    .ok()?;
+                let (d, cov) =
+                    state_increment(space, mean, &est.affine(), &est.affine_covariance()).ok()?;
+                ClusterMotion::new(space, d, &cov, &sigmas, est.converged)
+            });
+            let motion = motion.unwrap_or_else(|| {
+                failures += 1;
+                ClusterMotion::fallback(&self.dynamics, mean, &mean_prev)
+            });
+            self.clusters.push(motion);
+        }
+        Ok((k, failures))
+    }
+
+    fn estimate(
+        &self,
+        set: &ParticleSet<Particle>,
+    ) -> Result<(
+        StateVector,
+        Option<ClutterEstimate>,
+        Option<f64>,
+        Option<StatusEstimate>,
+    )> {
+        let weights = set.weights();
+        let states = set.states();
+        let clutter = match &self.dynamics.clutter {
+            ClutterProcess::Switching(hmm) => {
+                let cs: Vec<ClutterState> = states.iter().map(|p| p.clutter).collect();
+                Some(hmm.estimate(&cs, weights)?)
+            }
+            ClutterProcess::Fixed(_) => None,
+        };
+        let (gamma, status) = match &self.dynamics.occlusion {
+            OcclusionModel::None => (None, None),
+            OcclusionModel::RandomWalk(_) => (
+                Some(
+                    states
+                        .iter()
+                        .zip(weights)
+                        .map(|(p, w)| p.status.gamma * w)
+                        .sum(),
+                ),
+                None,
+            ),
+            OcclusionModel::Status(hmm) => {
+                let ss: Vec<StatusState> = states.iter().map(|p| p.status).collect();
+                let e = hmm.estimate(&ss, weights)?;
+                (Some(e.gamma_hat), Some(e))
+            }
+        };
+        let class = match (self.config.estimator, &clutter) {
+            (PoseEstimator::ClassConditionalMean, Some(c)) => Some(c.beta_hat),
+            _ => None,
+        };
+        let mut mean = [0.0; STATE_SLOTS];
+        let mut mass = 0.0;
+        for (p, &w) in states.iter().zip(weights) {
+            if class.is_none_or(|b| p.clutter.beta == b) {
+                mass += w;
+                for j in 0..STATE_SLOTS {
+                    mean[j] += w * p.now[j];
+                }
+            }
+        }
+        if !(mass > 0.0) {
+            return Err(Error::Smc(smc_core::Error::InvalidSetting {
+                name: "weights",
+                reason: "no weight on the estimated class".into(),
+            }));
+        }
+        for v in &mut mean {
+            *v /= mass;
+        }
+        Ok((mean, clutter, gamma, status))
+    }
+
+    fn report(&self, state: StateVector, millis: f64) -> Result<Estimate> {
+        let pose = self.config.space.pose(&state);
+        let ellipse = pose.to_ellipse().ok_or(Error::BadFrame {
+            frame: self.frame,
+            reason: "the estimated contour is not finite".into(),
+        })?;
+        Ok(Estimate {
+            frame: self.frame,
+            ellipse,
+            bbox: pose_box(&pose),
+            state,
+            ess: self.config.particles as f64,
+            diagnostics: None,
+            clutter: None,
+            gamma: None,
+            status: None,
+            motion_clusters: (0, 0),
+            millis,
+        })
+    }
+
+    fn check_frame(&self, frame: &Frame<'_>) -> Result<()> {
+        if (frame.width(), frame.height()) != self.size {
+            return Err(Error::BadFrame {
+                frame: self.frame + 1,
+                reason: format!(
+                    "{}×{} differs from the first frame's {}×{}",
+                    frame.width(),
+                    frame.height(),
+                    self.size.0,
+                    self.size.1
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+impl Tracker for ParticleTracker {
+    fn name(&self) -> &str {
+        &self.config.name
+    }
+
+    fn config(&self) -> &TrackerConfig {
+        &self.config
+    }
+
+    fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate> {
+        let start = Instant::now();
+        let values = [ellipse.cx, ellipse.cy, ellipse.a, ellipse.b, ellipse.theta];
+        if values.iter().any(|v| !v.is_finite()) || !(ellipse.a > 0.0 && ellipse.b > 0.0) {
+            return Err(Error::InvalidSetting {
+                name: "initial ellipse",
+                reason: format!("{ellipse:?} must be finite with positive semi-axes"),
+            });
+        }
+        let space = self.config.space;
+        let centre = space.from_ellipse(&ellipse);
+        let sigmas = self.dynamics.settings.sigmas(space, &centre);
+        let spread = self.config.init_spread;
+        let particles: Vec<Particle> = (0..self.config.particles)
+            .map(|i| {
+                let mut rng = smc_core::rng::particle_rng(self.config.seed, u64::MAX, i);
+                let mut x = centre;
+                for j in 0..space.dim() {
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    x[j] += spread * sigmas[j] * z;
+                }
+                space.clamp(&mut x, self.config.dynamics.min_scale);
+                let (clutter, status) = self.initial_hidden(i);
+                Particle::at_rest(x, clutter, status)
+            })
+            .collect();
+        self.set = Some(ParticleSet::from_states(particles)?);
+        self.size = (frame.width(), frame.height());
+        self.previous.clear();
+        self.previous.extend_from_slice(frame.data());
+        self.frame = 0;
+        if self.config.needs_motion() {
+            self.motion
+                .build_pyramid_into(frame.image_view()?, &mut self.pyramid_now)?;
+        }
+        self.report(centre, start.elapsed().as_secs_f64() * 1e3)
+    }
+
+    fn update(&mut self, frame: Frame<'_>) -> Result<Estimate> {
+        let start = Instant::now();
+        if self.set.is_none() {
+            return Err(Error::NotInitialised);
+        }
+        self.check_frame(&frame)?;
+        let step = self.frame as u64 + 1;
+        let seed = self.config.seed;
+        let resampled = {
+            let Some(set) = self.set.as_mut() else {
+                return Err(Error::NotInitialised);
+            };
+            self.filter
+                .resample_if_needed(set, &self.config.resampling, seed, step)?
+        };
+        let motion_clusters = if self.config.needs_motion() {
+            self.estimate_cluster_motions(&frame)?
+        } else {
+            (0, 0)
+        };
+        let Some(mut set) = self.set.take() else {
+            return Err(Error::NotInitialised);
+        };
+        let current = frame.grey_view()?;
+        let previous = contour_obs::GreyView::new(self.size.0, self.size.1, &self.previous)?;
+        let observation = FrameObservation {
+            model: &self.likelihood,
+            current,
+            previous,
+            clusters: &self.clusters,
+        };
+        let weighted = match self.config.proposal {
+            ProposalKind::Prior => {
+                let proposal = Bootstrap(&self.dynamics);
+                self.filter.propagate(&mut set, &proposal, seed, step);
+                self.filter.weight(
+                    &mut set,
+                    &proposal,
+                    None::<&TrackerDynamics>,
+                    &observation,
+                    step,
+                )
+            }
+            ProposalKind::Motion => {
+                let proposal = MotionProposal {
+                    dynamics: &self.dynamics,
+                    clusters: &self.clusters,
+                };
+                self.filter.propagate(&mut set, &proposal, seed, step);
+                self.filter.weight(
+                    &mut set,
+                    &proposal,
+                    Some(&self.dynamics),
+                    &observation,
+                    step,
+                )
+            }
+        };
+        let weighted = match weighted {
+            Ok(w) => w,
+            Err(e) => {
+                self.set = Some(set);
+                return Err(e.into());
+            }
+        };
+        let estimated = self.estimate(&set);
+        self.set = Some(set);
+        let (state, clutter, gamma, status) = estimated?;
+        self.frame += 1;
+        self.previous.clear();
+        self.previous.extend_from_slice(frame.data());
+        let mut report = self.report(state, 0.0)?;
+        report.ess = weighted.ess;
+        report.diagnostics = Some(StepDiagnostics {
+            ess: resampled.ess,
+            resampled: resampled.resampled,
+            distinct_ancestors: resampled.distinct_ancestors,
+            max_weight: weighted.max_weight,
+            log_evidence_increment: weighted.log_evidence_increment,
+            ess_after: weighted.ess,
+        });
+        report.clutter = clutter;
+        report.gamma = gamma;
+        report.status = status;
+        report.motion_clusters = motion_clusters;
+        report.millis = start.elapsed().as_secs_f64() * 1e3;
+        Ok(report)
+    }
+
+    fn particles(&self, max: usize) -> Vec<WeightedEllipse> {
+        let Some(set) = &self.set else {
+            return Vec::new();
+        };
+        let mut order: Vec<usize> = (0..set.len()).collect();
+        let w = set.weights();
+        order.sort_by(|&a, &b| w[b].total_cmp(&w[a]).then(a.cmp(&b)));
+        order
+            .into_iter()
+            .take(max)
+            .filter_map(|i| {
+                let ellipse = self.config.space.pose(&set.states()[i].now).to_ellipse()?;
+                Some(WeightedEllipse {
+                    ellipse,
+                    weight: w[i],
+                })
+            })
+            .collect()
+    }
+}
