@@ -11,6 +11,15 @@
 pub mod cli;
 pub mod commands;
 pub mod error;
+pub mod evaluation;
+pub mod groundtruth;
+pub mod metrics;
 pub mod output;
+pub mod plots;
+pub mod record;
+pub mod render;
+pub mod report;
+pub mod sequence;
+pub mod session;
 
 pub use error::{AppError, Result};

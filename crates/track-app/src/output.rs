@@ -41,6 +41,15 @@ pub fn write_atomic_with(
         fill(&mut buffered).map_err(wrap)?;
         buffered.flush().map_err(wrap)?;
     }
+    // Temporary files are created private (0600); outputs are ordinary files, readable by others
+    // as the user's umask would make them.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(wrap)?;
+    }
     tmp.as_file().sync_all().map_err(wrap)?;
     tmp.persist(path).map_err(|e| wrap(e.error))?;
     Ok(())

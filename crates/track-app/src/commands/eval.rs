@@ -1,15 +1,311 @@
-//! `track eval`.
+//! `track eval`: Odobez's Table 1, the accuracy of Wu's hidden processes, and OTB benchmarks.
 
+use std::path::{Path, PathBuf};
+
+use clap::Subcommand;
+use scene_synth::Scenario;
+use trackers::Preset;
+
+use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, progress, tracker_config};
+use crate::evaluation::{
+    SyntheticSequence, TABLE1_COLUMNS, TABLE1_TRACKERS, switching_csv, switching_markdown,
+    switching_scores, table1, table1_csv, table1_markdown,
+};
+use crate::groundtruth::{check_groundtruth_len, first_labelled, load_groundtruth};
+use crate::metrics::{SequenceMetrics, evaluate, mean_metrics};
+use crate::output::write_atomic;
+use crate::sequence::{FrameSource, open_sequence};
+use crate::session::Session;
 use crate::{AppError, Result};
 
 /// Arguments of `track eval`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// What to evaluate.
+    #[command(subcommand)]
+    pub what: Evaluation,
+}
+
+/// The evaluations.
+#[derive(Debug, Subcommand)]
+pub enum Evaluation {
+    /// Odobez's Table 1: success rates of m1, m2, m3 and full over dynamics D1–D4 and particle
+    /// counts S1–S2 on a synthetic scene.
+    #[command(after_help = "Example:\n  track eval table1 --trials 50 --frames 120 --out results/")]
+    Table1 {
+        /// The synthetic scenario.
+        #[arg(long, value_enum, default_value_t = ScenarioArg::Distractor)]
+        scenario: ScenarioArg,
+        /// Trials (seeds 1..=N) per cell.
+        #[arg(long, default_value_t = 50)]
+        trials: usize,
+        /// Frames of the scene (default: the scenario's length).
+        #[arg(long)]
+        frames: Option<usize>,
+        /// Seed of the scene (the trials' seeds are 1..=trials).
+        #[arg(long, default_value_t = 1)]
+        scene_seed: u64,
+        /// Trackers (repeatable; default m1, m2, m3, full).
+        #[arg(long = "tracker")]
+        trackers: Vec<String>,
+        /// Folder for table1.md and table1.csv.
+        #[arg(long, default_value = "track-eval")]
+        out: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Accuracy of β̂, γ̂ and α̂ against the generator's ground truth on the mclutter and
+    /// occlusion scenes.
+    #[command(after_help = "Example:\n  track eval switching --out results/")]
+    Switching {
+        /// Trackers (repeatable; default w-hmm, w-occ, w-eval, full).
+        #[arg(long = "tracker")]
+        trackers: Vec<String>,
+        /// Particles.
+        #[arg(long, default_value_t = DEFAULT_PARTICLES)]
+        particles: usize,
+        /// Tracker seed.
+        #[arg(long, default_value_t = DEFAULT_SEED)]
+        seed: u64,
+        /// Frames of each scene (default: the scenario's length).
+        #[arg(long)]
+        frames: Option<usize>,
+        /// Folder for switching.md and switching.csv.
+        #[arg(long, default_value = "track-eval")]
+        out: PathBuf,
+    },
+    /// Precision at 20 px, success AUC and frames/s on OTB folders (img/ + groundtruth_rect.txt;
+    /// frames labelled 0,0,0,0 are not scored).
+    #[command(after_help = "Example:\n  track eval otb ../shared/data/real/girl_mil --tracker m1 --tracker full")]
+    Otb {
+        /// OTB folders.
+        #[arg(required = true)]
+        sequences: Vec<PathBuf>,
+        /// Trackers (repeatable; default full).
+        #[arg(long = "tracker")]
+        trackers: Vec<String>,
+        /// Particles.
+        #[arg(long, default_value_t = DEFAULT_PARTICLES)]
+        particles: usize,
+        /// Tracker seed.
+        #[arg(long, default_value_t = DEFAULT_SEED)]
+        seed: u64,
+        /// Folder for otb.md and otb.csv.
+        #[arg(long, default_value = "track-eval")]
+        out: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+}
+
+/// The synthetic scenarios, for the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ScenarioArg {
+    /// Static camera, three clutter regions.
+    Mclutter,
+    /// The target passes behind an occluder.
+    Occlusion,
+    /// Camera motion, a distractor, abrupt velocity changes.
+    Distractor,
+    /// Abrupt zooms and head turns.
+    Zoom,
+}
+
+impl From<ScenarioArg> for Scenario {
+    fn from(s: ScenarioArg) -> Self {
+        match s {
+            ScenarioArg::Mclutter => Scenario::Mclutter,
+            ScenarioArg::Occlusion => Scenario::Occlusion,
+            ScenarioArg::Distractor => Scenario::Distractor,
+            ScenarioArg::Zoom => Scenario::Zoom,
+        }
+    }
+}
+
+fn presets(names: &[String], default: &[Preset]) -> Result<Vec<Preset>> {
+    if names.is_empty() {
+        return Ok(default.to_vec());
+    }
+    names
+        .iter()
+        .map(|n| Preset::from_name(n).map_err(|e| AppError::setting("--tracker", e.to_string())))
+        .collect()
+}
+
+fn positive(name: &str, v: usize) -> Result<()> {
+    if v == 0 {
+        return Err(AppError::setting(name, "must be at least 1"));
+    }
+    Ok(())
+}
 
 /// Runs `track eval`.
 ///
 /// # Errors
 /// See [`AppError`].
-pub fn run(_args: &Args) -> Result<()> {
-    Err(AppError::NotImplemented("eval"))
+pub fn run(args: &Args) -> Result<()> {
+    match &args.what {
+        Evaluation::Table1 {
+            scenario,
+            trials,
+            frames,
+            scene_seed,
+            trackers,
+            out,
+            quiet,
+        } => {
+            positive("--trials", *trials)?;
+            if let Some(f) = frames {
+                positive("--frames", *f)?;
+            }
+            let trackers = presets(trackers, &TABLE1_TRACKERS)?;
+            let seq = SyntheticSequence::render((*scenario).into(), *frames, *scene_seed)?;
+            let bar = progress(
+                (trackers.len() * TABLE1_COLUMNS.len()) as u64,
+                *quiet,
+                "table 1 cells",
+            );
+            let rows = table1(&seq, &trackers, &TABLE1_COLUMNS, *trials, &|| bar.inc(1))?;
+            bar.finish_and_clear();
+            let md = format!(
+                "Odobez Table 1 protocol on the synthetic `{}` scene ({} frames, scene seed {}).\n\n{}",
+                seq.name,
+                seq.frames.len(),
+                scene_seed,
+                table1_markdown(&rows, &TABLE1_COLUMNS, *trials)
+            );
+            write_atomic(&out.join("table1.md"), md.as_bytes())?;
+            write_atomic(&out.join("table1.csv"), table1_csv(&rows, &TABLE1_COLUMNS, *trials).as_bytes())?;
+            println!("{md}");
+            Ok(())
+        }
+        Evaluation::Switching {
+            trackers,
+            particles,
+            seed,
+            frames,
+            out,
+        } => {
+            positive("--particles", *particles)?;
+            let trackers = presets(trackers, &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full])?;
+            let mut rows = Vec::new();
+            for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
+                let seq = SyntheticSequence::render(scenario, *frames, 1)?;
+                for t in &trackers {
+                    let output = seq.track(t.config(*particles, *seed), None)?;
+                    rows.push(switching_scores(&seq, t.name(), &output.records));
+                }
+            }
+            let md = switching_markdown(&rows);
+            write_atomic(&out.join("switching.md"), md.as_bytes())?;
+            write_atomic(&out.join("switching.csv"), switching_csv(&rows).as_bytes())?;
+            println!("{md}");
+            Ok(())
+        }
+        Evaluation::Otb {
+            sequences,
+            trackers,
+            particles,
+            seed,
+            out,
+            quiet,
+        } => {
+            let trackers = presets(trackers, &[Preset::Full])?;
+            let mut rows: Vec<(String, String, SequenceMetrics)> = Vec::new();
+            for t in &trackers {
+                let mut per_tracker = Vec::new();
+                for dir in sequences {
+                    let m = evaluate_otb(dir, t.name(), *particles, *seed, *quiet)?;
+                    rows.push((sequence_name(dir), t.name().to_owned(), m.clone()));
+                    per_tracker.push(m);
+                }
+                if let Some(mean) = mean_metrics(&per_tracker) {
+                    rows.push(("mean".to_owned(), t.name().to_owned(), mean));
+                }
+            }
+            let md = otb_markdown(&rows);
+            write_atomic(&out.join("otb.md"), md.as_bytes())?;
+            write_atomic(&out.join("otb.csv"), otb_csv(&rows).as_bytes())?;
+            println!("{md}");
+            Ok(())
+        }
+    }
+}
+
+fn sequence_name(dir: &Path) -> String {
+    dir.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| dir.display().to_string())
+}
+
+/// Tracks one OTB folder from its first labelled box and scores it.
+fn evaluate_otb(dir: &Path, tracker: &str, particles: usize, seed: u64, quiet: bool) -> Result<SequenceMetrics> {
+    let spec = dir.to_string_lossy();
+    let mut sequence = open_sequence(&spec)?;
+    let gt_path = sequence
+        .groundtruth
+        .clone()
+        .ok_or_else(|| AppError::input(dir, "not an OTB folder: groundtruth_rect.txt is missing"))?;
+    let info = sequence.source.validate_all()?;
+    let truth = load_groundtruth(&gt_path)?;
+    check_groundtruth_len(&truth, info.frames, &gt_path)?;
+    let (start, init_box) = first_labelled(&truth)
+        .ok_or_else(|| AppError::input(&gt_path, "no labelled frame"))?;
+    init_box.validate_in_frame(info.width, info.height, "the first ground-truth box")?;
+    let init = init_box.inscribed_ellipse();
+    let config = tracker_config(tracker, None, Some(particles), Some(seed), false)?;
+    let mut session = Session::new(
+        trackers::build(config).map_err(|e| AppError::setting("--tracker", e.to_string()))?,
+        None,
+    );
+    let bar = progress(info.frames as u64, quiet, &format!("{tracker} on {}", sequence.name));
+    while let Some(frame) = sequence.source.next_frame()? {
+        bar.inc(1);
+        if frame.index >= start {
+            session.push(&frame, &init, None)?;
+        }
+    }
+    bar.finish_and_clear();
+    let output = session.finish();
+    let boxes: Vec<_> = output.records.iter().map(|r| r.bbox).collect();
+    evaluate(&boxes, &truth[start..start + boxes.len()], Some(output.seconds.max(1e-9)))
+}
+
+fn otb_markdown(rows: &[(String, String, SequenceMetrics)]) -> String {
+    let mut s = String::from(
+        "| Sequence | Tracker | Precision@20px | Success AUC | Mean IoU | Frames/s | Failed at |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    for (seq, tracker, m) in rows {
+        s.push_str(&format!(
+            "| {seq} | {tracker} | {:.3} | {:.3} | {:.3} | {:.1} | {} |\n",
+            m.precision_20,
+            m.success_auc,
+            m.mean_iou,
+            m.fps.unwrap_or(0.0),
+            m.failed_at_frame
+                .map(|f| (f + 1).to_string())
+                .unwrap_or_else(|| "—".into())
+        ));
+    }
+    s
+}
+
+fn otb_csv(rows: &[(String, String, SequenceMetrics)]) -> String {
+    let mut s = String::from("sequence,tracker,frames,labelled,precision_20,success_auc,mean_iou,fps,failed_at\n");
+    for (seq, tracker, m) in rows {
+        s.push_str(&format!(
+            "{seq},{tracker},{},{},{:.4},{:.4},{:.4},{:.2},{}\n",
+            m.frames,
+            m.labelled_frames,
+            m.precision_20,
+            m.success_auc,
+            m.mean_iou,
+            m.fps.unwrap_or(0.0),
+            m.failed_at_frame.map(|f| (f + 1).to_string()).unwrap_or_default()
+        ));
+    }
+    s
 }

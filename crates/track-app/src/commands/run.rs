@@ -1,15 +1,375 @@
-//! `track run`.
+//! `track run`: track an object through a sequence and write what the tracker believed.
 
+use std::path::{Path, PathBuf};
+
+use indicatif::{ProgressBar, ProgressStyle};
+use trackers::{Preset, TrackerConfig};
+
+use crate::groundtruth::{
+    Box2, Ellipse, check_groundtruth_len, first_labelled, load_groundtruth, parse_box_arg,
+    parse_ellipse_arg,
+};
+use crate::metrics::{SequenceMetrics, evaluate};
+use crate::output::write_atomic;
+use crate::plots::{all_figures, write_figures};
+use crate::record::{FrameRecord, Summary, TrackerStatus, write_csv, write_summary};
+use crate::render::{thumbnail, write_gif, write_png};
+use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
+use crate::sequence::{FrameSource, open_sequence};
+use crate::session::{ColourBy, DrawOptions, Session};
 use crate::{AppError, Result};
+
+/// Default number of particles.
+pub const DEFAULT_PARTICLES: usize = 200;
+/// Default seed.
+pub const DEFAULT_SEED: u64 = 1;
+/// Largest number of frames put in the animated GIF (longer runs use every k-th overlay).
+pub const GIF_MAX_FRAMES: usize = 150;
+/// Number of overlay frames in the report's strip.
+pub const STRIP_FRAMES: usize = 8;
 
 /// Arguments of `track run`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+#[command(after_help = "Examples:\n  \
+    track run ../shared/data/real/girl_mil --tracker m3 --out girl --overlay --report\n  \
+    track run frames/ --init 120,40,60,70 --tracker w-eval --plots\n  \
+    ffmpeg -i video.mp4 -f yuv4mpegpipe - | track run - --init 100,80,60,70 --out video\n\n\
+    Outputs in --out: track.csv, boxes.txt, summary.json; overlay/NNNN.png (--overlay), track.gif \
+    (--gif), plots/*.svg (--plots), report.html (--report).")]
+pub struct Args {
+    /// A folder of images (sorted by name), an OTB folder (img/ + groundtruth_rect.txt), a .y4m
+    /// file, or - for Y4M on standard input.
+    pub sequence: String,
+    /// Tracker preset: m1, m2, m3, w-fixed, w-switch, w-hmm, w-occ, w-eval, full.
+    #[arg(long, default_value = "full")]
+    pub tracker: String,
+    /// Number of particles [default: 200, or the configuration file's].
+    #[arg(long)]
+    pub particles: Option<usize>,
+    /// Random seed [default: 1, or the configuration file's].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Initial box x,y,w,h on the first frame (default: the first labelled box of an OTB folder).
+    #[arg(long, value_parser = parse_box, conflicts_with = "init_ellipse")]
+    pub init: Option<Box2>,
+    /// Initial ellipse cx,cy,a,b,angle (angle in radians) on the first frame.
+    #[arg(long, value_parser = parse_ellipse)]
+    pub init_ellipse: Option<Ellipse>,
+    /// A tracker configuration (JSON or TOML, the `TrackerConfig` of the trackers crate); replaces
+    /// the preset.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Output folder.
+    #[arg(long, default_value = "track-out")]
+    pub out: PathBuf,
+    /// Write overlay PNG frames into OUT/overlay/.
+    #[arg(long)]
+    pub overlay: bool,
+    /// Write an animated GIF of the overlays, OUT/track.gif.
+    #[arg(long)]
+    pub gif: bool,
+    /// Write SVG plots of β̂, λ̂, γ̂, α̂ and ESS into OUT/plots/.
+    #[arg(long)]
+    pub plots: bool,
+    /// Write a self-contained HTML report, OUT/report.html.
+    #[arg(long)]
+    pub report: bool,
+    /// What colours the contour in overlays.
+    #[arg(long, value_enum, default_value_t)]
+    pub colour_by: ColourBy,
+    /// Weight particles on all cores (same results as one core).
+    #[arg(long)]
+    pub parallel: bool,
+    /// No progress bar and no summary.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Parses `--init x,y,w,h` for clap.
+///
+/// # Errors
+/// The message of [`parse_box_arg`].
+pub fn parse_box(s: &str) -> std::result::Result<Box2, String> {
+    parse_box_arg(s, "--init").map_err(|e| e.to_string())
+}
+
+/// Parses `--init-ellipse cx,cy,a,b,angle` (angle in radians) for clap.
+///
+/// # Errors
+/// The message of [`parse_ellipse_arg`].
+pub fn parse_ellipse(s: &str) -> std::result::Result<Ellipse, String> {
+    parse_ellipse_arg(s, "--init-ellipse").map_err(|e| e.to_string())
+}
+
+/// The tracker configuration from `--config` or the preset, with `--particles`, `--seed` and
+/// `--parallel` applied, validated.
+///
+/// # Errors
+/// [`AppError::InvalidSetting`] for an unknown preset or an invalid value;
+/// [`AppError::BadInput`] for an unreadable or malformed configuration file.
+pub fn tracker_config(
+    preset: &str,
+    config: Option<&Path>,
+    particles: Option<usize>,
+    seed: Option<u64>,
+    parallel: bool,
+) -> Result<TrackerConfig> {
+    let mut c = match config {
+        Some(path) => load_config(path)?,
+        None => Preset::from_name(preset)
+            .map_err(|e| AppError::setting("--tracker", e.to_string()))?
+            .config(DEFAULT_PARTICLES, DEFAULT_SEED),
+    };
+    if let Some(n) = particles {
+        c.particles = n;
+    }
+    if let Some(s) = seed {
+        c.seed = s;
+    }
+    c.filter.parallel |= parallel;
+    c.validate().map_err(|e| {
+        let name = if config.is_some() { "--config" } else { "--particles" };
+        AppError::setting(name, e.to_string())
+    })?;
+    Ok(c)
+}
+
+fn load_config(path: &Path) -> Result<TrackerConfig> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| AppError::input(path, format!("cannot read the configuration: {e}")))?;
+    let is_toml = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if is_toml {
+        toml::from_str(&text).map_err(|e| AppError::input(path, format!("invalid TOML: {e}")))
+    } else {
+        serde_json::from_str(&text).map_err(|e| AppError::input(path, format!("invalid JSON: {e}")))
+    }
+}
+
+/// A progress bar on standard error, hidden when `quiet`.
+pub fn progress(len: u64, quiet: bool, what: &str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template(
+        "{msg} [{bar:30}] {pos}/{len} frames, {per_sec}, eta {eta}",
+    ) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(what.to_owned());
+    bar
+}
 
 /// Runs `track run`.
 ///
 /// # Errors
-/// See [`AppError`].
-pub fn run(_args: &Args) -> Result<()> {
-    Err(AppError::NotImplemented("run"))
+/// See [`AppError`]; every input problem is found before anything is written.
+pub fn run(args: &Args) -> Result<()> {
+    let config = tracker_config(
+        &args.tracker,
+        args.config.as_deref(),
+        args.particles,
+        args.seed,
+        args.parallel,
+    )?;
+    let mut sequence = open_sequence(&args.sequence)?;
+    let info = sequence.source.validate_all()?;
+    let truth = match &sequence.groundtruth {
+        Some(path) => {
+            let t = load_groundtruth(path)?;
+            check_groundtruth_len(&t, info.frames, path)?;
+            Some(t)
+        }
+        None => None,
+    };
+    let (start, init) = match (args.init, args.init_ellipse, &truth) {
+        (Some(b), _, _) => {
+            b.validate_in_frame(info.width, info.height, "--init")?;
+            (0, b.inscribed_ellipse())
+        }
+        (None, Some(e), _) => {
+            e.bounding_box()
+                .validate_in_frame(info.width, info.height, "--init-ellipse")?;
+            (0, e)
+        }
+        (None, None, Some(t)) => {
+            let (k, b) = first_labelled(t)
+                .ok_or_else(|| AppError::setting("--init", "the ground truth labels no frame"))?;
+            b.validate_in_frame(info.width, info.height, "the first ground-truth box")?;
+            (k, b.inscribed_ellipse())
+        }
+        (None, None, None) => {
+            return Err(AppError::setting(
+                "--init",
+                "this sequence has no ground truth: give --init x,y,w,h or --init-ellipse",
+            ));
+        }
+    };
+
+    let draw = (args.overlay || args.gif || args.report).then(|| DrawOptions {
+        colour_by: args.colour_by,
+        ..DrawOptions::default()
+    });
+    let mut session = Session::new(
+        trackers::build(config.clone()).map_err(|e| AppError::setting("--tracker", e.to_string()))?,
+        draw,
+    );
+    let gif_every = info.frames.div_ceil(GIF_MAX_FRAMES).max(1);
+    let strip = strip_indices(info.frames - start, STRIP_FRAMES);
+    let mut gif_frames = Vec::new();
+    let mut strip_frames = Vec::new();
+    let mut written = Vec::new();
+    let bar = progress(info.frames as u64, args.quiet, &format!("{} on {}", config.name, sequence.name));
+    while let Some(frame) = sequence.source.next_frame()? {
+        bar.inc(1);
+        if frame.index < start {
+            continue;
+        }
+        let gt = truth.as_ref().and_then(|t| t.get(frame.index).copied().flatten());
+        session.push(&frame, &init, gt)?;
+        if let Some(img) = session.take_overlay() {
+            let k = frame.index - start;
+            if args.overlay {
+                let name = format!("overlay/{:04}.png", frame.index + 1);
+                write_png(&args.out.join(&name), &img)?;
+                written.push(name);
+            }
+            if args.gif && k % gif_every == 0 {
+                gif_frames.push(img.clone());
+            }
+            if args.report && strip.contains(&k) {
+                strip_frames.push((format!("frame {}", frame.index + 1), thumbnail(&img, 200)));
+            }
+        }
+    }
+    bar.finish_and_clear();
+    let output = session.finish();
+    let records = output.records;
+
+    write_csv(&args.out.join("track.csv"), &records)?;
+    write_atomic(
+        &args.out.join("boxes.txt"),
+        boxes_with_gap(start, &records).as_bytes(),
+    )?;
+    written.extend(["track.csv".to_owned(), "boxes.txt".to_owned()]);
+    if args.gif {
+        write_gif(&args.out.join("track.gif"), &gif_frames, 1000 / 12 * gif_every as u32)?;
+        written.push("track.gif".into());
+    }
+    let figures = if args.plots || args.report {
+        all_figures(&records)?
+    } else {
+        Vec::new()
+    };
+    if args.plots {
+        for p in write_figures(&args.out.join("plots"), &figures)? {
+            if let Ok(rel) = p.strip_prefix(&args.out) {
+                written.push(rel.display().to_string());
+            }
+        }
+    }
+    let metrics = match &truth {
+        Some(t) => Some(score(start, &records, t, output.seconds)?),
+        None => None,
+    };
+    let mut summary = Summary {
+        tool_version: env!("CARGO_PKG_VERSION").to_owned(),
+        sequence: sequence.name.clone(),
+        tracker: config.name.clone(),
+        particles: config.particles,
+        seed: config.seed,
+        frames: records.len(),
+        width: info.width,
+        height: info.height,
+        initial_box: Some(init.bounding_box()),
+        seconds: output.seconds,
+        fps: records.len() as f64 / output.seconds.max(1e-9),
+        mean_millis: 1e3 * output.seconds / records.len().max(1) as f64,
+        status_counts: status_counts(&records),
+        metrics,
+        outputs: Vec::new(),
+    };
+    if args.report {
+        written.push("report.html".into());
+    }
+    written.push("summary.json".into());
+    summary.outputs = written;
+    if args.report {
+        let input = ReportInput {
+            title: format!("{} — {}", sequence.name, config.name),
+            subtitle: format!(
+                "track run {} --tracker {} --particles {} --seed {}",
+                args.sequence, config.name, config.particles, config.seed
+            ),
+            metrics: summary_rows(&summary),
+            figures,
+            strip: strip_frames,
+        };
+        write_report(&args.out.join("report.html"), &input)?;
+    }
+    write_summary(&args.out.join("summary.json"), &summary)?;
+    if !args.quiet {
+        print_summary(&summary, &args.out);
+    }
+    Ok(())
+}
+
+/// `boxes.txt`: one line per input frame; frames before the tracker started (an OTB sequence
+/// whose first label comes later) get `0,0,0,0`, the OTB convention for "no box".
+fn boxes_with_gap(start: usize, records: &[FrameRecord]) -> String {
+    let mut s = "0,0,0,0\n".repeat(start);
+    for r in records {
+        let b = r.bbox;
+        s.push_str(&format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.w, b.h));
+    }
+    s
+}
+
+/// Scores the tracked frames against the ground truth of the same frames.
+fn score(start: usize, records: &[FrameRecord], truth: &[Option<Box2>], seconds: f64) -> Result<SequenceMetrics> {
+    let boxes: Vec<Box2> = records.iter().map(|r| r.bbox).collect();
+    let t = &truth[start..start + boxes.len()];
+    evaluate(&boxes, t, Some(seconds.max(1e-9)))
+}
+
+fn status_counts(records: &[FrameRecord]) -> Option<[usize; 3]> {
+    let mut counts = [0; 3];
+    let mut any = false;
+    for r in records {
+        if let Some(s) = r.alpha_hat {
+            counts[s.index()] += 1;
+            any = true;
+        }
+    }
+    any.then_some(counts)
+}
+
+fn print_summary(s: &Summary, out: &Path) {
+    println!(
+        "{}: {} frames with {} ({} particles) at {:.1} frames/s",
+        s.sequence, s.frames, s.tracker, s.particles, s.fps
+    );
+    if let Some(m) = &s.metrics {
+        println!(
+            "  precision@20px {:.3}, success AUC {:.3}, mean IoU {:.3}{}",
+            m.precision_20,
+            m.success_auc,
+            m.mean_iou,
+            m.failed_at_frame
+                .map(|f| format!(", lost at frame {}", f + 1))
+                .unwrap_or_default()
+        );
+    }
+    if let Some(c) = s.status_counts {
+        println!(
+            "  status: {} locked, {} partial, {} lost",
+            c[TrackerStatus::Locked.index()],
+            c[TrackerStatus::Partial.index()],
+            c[TrackerStatus::Lost.index()]
+        );
+    }
+    println!("  outputs in {}", out.display());
 }

@@ -1,0 +1,154 @@
+//! Motion estimation cost (issue 3): pyramid build, and one estimate per region size and model,
+//! including the pyramids of both frames, on a 320×240 synthetic pair.
+#![allow(missing_docs)]
+
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use motion_est::{
+    FrameBuffers, ImageView, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Settings,
+    Workspace,
+};
+
+const W: usize = 320;
+const H: usize = 240;
+
+/// A textured pair: frame 1 is frame 0 under a small affine warp about the centre.
+fn pair() -> (Vec<f32>, Vec<f32>) {
+    let comps: Vec<[f64; 3]> = (0..60)
+        .map(|i| {
+            let f = i as f64;
+            let lambda = 3.0 + 37.0 * ((f * 0.618_034) % 1.0);
+            let dir = f * 2.399_963;
+            let k = std::f64::consts::TAU / lambda;
+            [k * dir.cos(), k * dir.sin(), f * 1.3]
+        })
+        .collect();
+    let tex = |x: f64, y: f64| {
+        128.0
+            + 7.3
+                * comps
+                    .iter()
+                    .map(|c| (c[0] * x + c[1] * y + c[2]).sin())
+                    .sum::<f64>()
+    };
+    let (cx, cy) = (159.5, 119.5);
+    let f0 = (0..W * H)
+        .map(|k| tex((k % W) as f64, (k / W) as f64) as f32)
+        .collect();
+    let f1 = (0..W * H)
+        .map(|k| {
+            let (x, y) = ((k % W) as f64 - cx, (k / W) as f64 - cy);
+            // Inverse of d = (3 + 0.03x, −2 + 0.03y).
+            tex(cx + (x - 3.0) / 1.03, cy + (y + 2.0) / 1.03) as f32
+        })
+        .collect();
+    (f0, f1)
+}
+
+fn region(size: usize) -> Region<'static> {
+    if size >= W {
+        Region::Full
+    } else {
+        Region::Rect {
+            x: (W - size) as f64 / 2.0,
+            y: (H - size) as f64 / 2.0,
+            width: size as f64,
+            height: size as f64,
+        }
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let (f0, f1) = pair();
+    let v0 = ImageView::new(W, H, &f0).unwrap();
+    let v1 = ImageView::new(W, H, &f1).unwrap();
+    let est = MotionEstimator::new(Settings::default()).unwrap();
+
+    if std::env::var("SHOW").is_ok() {
+        for size in [32usize, 64, 128, W] {
+            let r = est
+                .estimate_images(
+                    v0,
+                    v1,
+                    &region(size),
+                    ModelSpec::new(MotionModel::Affine, false),
+                    None,
+                )
+                .unwrap();
+            eprintln!(
+                "{size}: iterations {:?} converged {} params {:?}",
+                r.iterations, r.converged, r.params
+            );
+        }
+    }
+    let mut g = c.benchmark_group("pyramid");
+    g.throughput(Throughput::Elements((W * H) as u64));
+    let mut pyr = Pyramid::new();
+    g.bench_function(BenchmarkId::new("build", "320x240"), |b| {
+        b.iter(|| est.build_pyramid_into(black_box(v0), &mut pyr).unwrap())
+    });
+    g.finish();
+
+    // One estimate including both frames' pyramids over the region's box plus margin.
+    let mut g = c.benchmark_group("estimate_with_pyramids");
+    let mut bufs = FrameBuffers::default();
+    for model in [
+        MotionModel::Translation,
+        MotionModel::Scale,
+        MotionModel::Affine,
+    ] {
+        for size in [32usize, 64, 128, W] {
+            let r = region(size);
+            let pixels = if size >= W { W * H } else { size * size };
+            g.throughput(Throughput::Elements(pixels as u64));
+            let label = if size >= W {
+                "320x240".to_string()
+            } else {
+                format!("{size}x{size}")
+            };
+            g.bench_function(BenchmarkId::new(model.name(), label), |b| {
+                b.iter(|| {
+                    est.estimate_images_into(
+                        black_box(v0),
+                        black_box(v1),
+                        &r,
+                        ModelSpec::new(model, false),
+                        None,
+                        &mut bufs,
+                    )
+                    .unwrap()
+                })
+            });
+        }
+    }
+    g.finish();
+
+    // Many regions per frame pair: pyramids built once, estimate only.
+    let mut g = c.benchmark_group("estimate_shared_pyramids");
+    let (mut p0, mut p1) = (Pyramid::new(), Pyramid::new());
+    est.build_pyramid_into(v0, &mut p0).unwrap();
+    est.build_pyramid_into(v1, &mut p1).unwrap();
+    let mut ws = Workspace::new();
+    for size in [32usize, 64, 128] {
+        let r = region(size);
+        g.throughput(Throughput::Elements((size * size) as u64));
+        g.bench_function(BenchmarkId::new("affine", format!("{size}x{size}")), |b| {
+            b.iter(|| {
+                est.estimate(
+                    &p0,
+                    &p1,
+                    &r,
+                    ModelSpec::new(MotionModel::Affine, false),
+                    None,
+                    &mut ws,
+                )
+                .unwrap()
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

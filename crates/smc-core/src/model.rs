@@ -1,0 +1,118 @@
+//! The capability traits of a state-space model (Odobez Eq. 3): the transition prior, the
+//! proposal, the observation model.
+//!
+//! The weight update is w ∝ w′ · p(z|x) · p(x|x′) / q(x|x′, z). The bootstrap filter is the special
+//! case q = p(x|x′), where the last two factors cancel; [`Bootstrap`] turns any [`Dynamics`] into
+//! that proposal, and the filter then skips both density evaluations.
+
+use std::marker::PhantomData;
+
+/// The transition prior p(x | x′) (the dynamics).
+pub trait Dynamics: Sync {
+    /// The state type.
+    type State: Clone + Send + Sync;
+
+    /// Draws x ~ p(· | `previous`).
+    fn sample<R: rand::Rng + ?Sized>(&self, previous: &Self::State, rng: &mut R) -> Self::State;
+
+    /// log p(`next` | `previous`). May be −∞; must not be NaN or +∞ for a valid pair.
+    fn log_density(&self, previous: &Self::State, next: &Self::State) -> f64;
+}
+
+/// The importance (proposal) distribution q(x | x′, z).
+///
+/// `index` is the particle index, so that a proposal may differ per particle (for instance one
+/// motion estimate per cluster of particles, Odobez Eq. 16).
+pub trait Proposal: Sync {
+    /// The state type.
+    type State: Clone + Send + Sync;
+
+    /// Draws x ~ q(· | `previous`, z) for particle `index`.
+    fn sample<R: rand::Rng + ?Sized>(
+        &self,
+        index: usize,
+        previous: &Self::State,
+        rng: &mut R,
+    ) -> Self::State;
+
+    /// log q(`next` | `previous`, z) for particle `index`.
+    fn log_density(&self, index: usize, previous: &Self::State, next: &Self::State) -> f64;
+}
+
+/// The observation model log p(z | x) for one frame (the measurement z is held by the value).
+pub trait Observation: Sync {
+    /// The state type.
+    type State;
+
+    /// log p(z | `state`). May be −∞; NaN and +∞ are reported as degenerate weights.
+    fn log_likelihood(&self, state: &Self::State) -> f64;
+
+    /// Writes log p(z | `states[i]`) into `out[i]`. The default loops over
+    /// [`Observation::log_likelihood`]; override it when a batch is cheaper (shared setup,
+    /// vectorisation). It must be element-wise: the filter may call it on contiguous chunks of the
+    /// particle set (the parallel path), and the results must not depend on the chunking.
+    ///
+    /// # Panics
+    /// The default panics if the lengths differ; the filter always passes equal lengths.
+    fn log_likelihood_batch(&self, states: &[Self::State], out: &mut [f64]) {
+        assert_eq!(states.len(), out.len(), "states and out differ in length");
+        for (s, o) in states.iter().zip(out.iter_mut()) {
+            *o = self.log_likelihood(s);
+        }
+    }
+}
+
+/// Uses a transition prior as the proposal: the bootstrap (CONDENSATION) filter, Odobez H3.
+///
+/// The particle index is ignored. When the filter is given no separate prior, the prior and
+/// proposal densities are not evaluated (they would cancel).
+#[derive(Debug, Clone, Copy)]
+pub struct Bootstrap<'a, D>(pub &'a D);
+
+impl<D: Dynamics> Proposal for Bootstrap<'_, D> {
+    type State = D::State;
+
+    fn sample<R: rand::Rng + ?Sized>(
+        &self,
+        _index: usize,
+        previous: &Self::State,
+        rng: &mut R,
+    ) -> Self::State {
+        self.0.sample(previous, rng)
+    }
+
+    fn log_density(&self, _index: usize, previous: &Self::State, next: &Self::State) -> f64 {
+        self.0.log_density(previous, next)
+    }
+}
+
+/// An observation model given by a closure `Fn(&S) -> f64` returning log p(z | x).
+///
+/// # Examples
+/// ```
+/// use smc_core::model::{FnObservation, Observation};
+/// let obs = FnObservation::new(|x: &f64| -0.5 * (x - 1.0).powi(2));
+/// assert_eq!(obs.log_likelihood(&1.0), 0.0);
+/// ```
+pub struct FnObservation<S, F> {
+    f: F,
+    _state: PhantomData<fn(&S)>,
+}
+
+impl<S, F: Fn(&S) -> f64 + Sync> FnObservation<S, F> {
+    /// Wraps the closure.
+    pub fn new(f: F) -> Self {
+        Self {
+            f,
+            _state: PhantomData,
+        }
+    }
+}
+
+impl<S, F: Fn(&S) -> f64 + Sync> Observation for FnObservation<S, F> {
+    type State = S;
+
+    fn log_likelihood(&self, state: &S) -> f64 {
+        (self.f)(state)
+    }
+}

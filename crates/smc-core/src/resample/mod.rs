@@ -1,0 +1,224 @@
+//! Resampling: turn a weighted set into ancestor indices (Odobez Fig. 2, step 3; Wu Fig. 6).
+//!
+//! Every scheme takes normalised (or merely non-negative) weights w₁..w_N and an output size M,
+//! and writes M ancestor indices into a caller-owned buffer. All are unbiased: the expected
+//! number of offspring of particle i is M·wᵢ/Σw. They differ in variance and cost:
+//!
+//! | scheme | offspring count of particle i (L = M wᵢ / Σw) | cost |
+//! |---|---|---|
+//! | [`Multinomial`] | Binomial(M, wᵢ/Σw): anything in 0..=M | O(N + M), sorted uniforms by exponential spacings |
+//! | [`Residual`] | ⌊L⌋ + a multinomial share of the remainders: at least ⌊L⌋ | O(N + M) |
+//! | [`Stratified`] | between ⌊L⌋ − 1 and ⌈L⌉ + 1 (one uniform per stratum; the two strata at the ends of particle i's interval may or may not land in it) | O(N + M) |
+//! | [`Systematic`] | ⌊L⌋ or ⌈L⌉, always | O(N + M), one uniform |
+//!
+//! The guarantees hold in exact arithmetic; in floating point the cumulative sums carry a relative
+//! rounding error of order N·ε, which can move a count across an integer only when L is within
+//! about N·ε·M of one.
+
+mod multinomial;
+mod residual;
+mod stratified;
+mod systematic;
+
+pub use multinomial::Multinomial;
+pub use residual::Residual;
+pub use stratified::Stratified;
+pub use systematic::Systematic;
+
+use crate::error::{Degeneracy, Error, Result};
+
+/// A resampling scheme: writes `output_size` ancestor indices drawn according to the weights.
+pub trait Resampler {
+    /// Fills `ancestors` (cleared first) with `output_size` indices into `normalized_weights`.
+    ///
+    /// The weights need only be non-negative and finite with a positive sum; they are treated as
+    /// if divided by their sum. Particles with zero weight never get offspring.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] for an empty weight slice or `output_size == 0`;
+    /// [`Error::InvalidWeights`] for a negative, infinite or NaN weight or an all-zero slice.
+    fn resample<R: rand::Rng + ?Sized>(
+        &self,
+        normalized_weights: &[f64],
+        output_size: usize,
+        rng: &mut R,
+        ancestors: &mut Vec<usize>,
+    ) -> Result<()>;
+
+    /// Allocating convenience twin of [`Resampler::resample`].
+    ///
+    /// # Errors
+    /// As [`Resampler::resample`].
+    fn resample_vec<R: rand::Rng + ?Sized>(
+        &self,
+        normalized_weights: &[f64],
+        output_size: usize,
+        rng: &mut R,
+    ) -> Result<Vec<usize>> {
+        let mut ancestors = Vec::with_capacity(output_size);
+        self.resample(normalized_weights, output_size, rng, &mut ancestors)?;
+        Ok(ancestors)
+    }
+}
+
+/// The built-in schemes, as a value (for settings files and command lines).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum ResamplingScheme {
+    /// [`Multinomial`].
+    Multinomial,
+    /// [`Residual`].
+    Residual,
+    /// [`Stratified`].
+    Stratified,
+    /// [`Systematic`], the default: lowest variance of the four and cheapest.
+    #[default]
+    Systematic,
+}
+
+impl ResamplingScheme {
+    /// All built-in schemes.
+    pub const ALL: [Self; 4] = [
+        Self::Multinomial,
+        Self::Residual,
+        Self::Stratified,
+        Self::Systematic,
+    ];
+
+    /// Lower-case name, as used in settings files.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Multinomial => "multinomial",
+            Self::Residual => "residual",
+            Self::Stratified => "stratified",
+            Self::Systematic => "systematic",
+        }
+    }
+}
+
+impl Resampler for ResamplingScheme {
+    fn resample<R: rand::Rng + ?Sized>(
+        &self,
+        normalized_weights: &[f64],
+        output_size: usize,
+        rng: &mut R,
+        ancestors: &mut Vec<usize>,
+    ) -> Result<()> {
+        match self {
+            Self::Multinomial => {
+                Multinomial.resample(normalized_weights, output_size, rng, ancestors)
+            }
+            Self::Residual => Residual.resample(normalized_weights, output_size, rng, ancestors),
+            Self::Stratified => {
+                Stratified.resample(normalized_weights, output_size, rng, ancestors)
+            }
+            Self::Systematic => {
+                Systematic.resample(normalized_weights, output_size, rng, ancestors)
+            }
+        }
+    }
+}
+
+/// What every scheme needs to know about its input, gathered in one validating pass.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct WeightSummary {
+    /// Σ wᵢ (positive).
+    pub total: f64,
+    /// The largest index with a positive weight: rounding must never hand offspring past it.
+    pub last_positive: usize,
+}
+
+/// Validates the arguments of [`Resampler::resample`] and summarises the weights.
+pub(crate) fn summarise(weights: &[f64], output_size: usize) -> Result<WeightSummary> {
+    if weights.is_empty() {
+        return Err(Error::InvalidSetting {
+            name: "weights",
+            reason: "cannot resample from zero particles".into(),
+        });
+    }
+    if output_size == 0 {
+        return Err(Error::InvalidSetting {
+            name: "output_size",
+            reason: "must be at least 1".into(),
+        });
+    }
+    // One branch-free pass with four independent accumulators, so that the additions are not one
+    // serial dependency chain. A NaN or +∞ shows in the sum, a negative value (−∞ included) in
+    // the minimum; the slow scan below only runs on bad input. (Testing each weight with
+    // comparisons instead compiles to an integer classification of its bits that cost more than
+    // the rest of systematic resampling.)
+    let mut sums = [0.0f64; 4];
+    let mut mins = [0.0f64; 4];
+    let chunks = weights.chunks_exact(4);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for k in 0..4 {
+            sums[k] += c[k];
+            mins[k] = mins[k].min(c[k]);
+        }
+    }
+    for &w in rest {
+        sums[0] += w;
+        mins[0] = mins[0].min(w);
+    }
+    let total = (sums[0] + sums[1]) + (sums[2] + sums[3]);
+    let min = mins[0].min(mins[1]).min(mins[2].min(mins[3]));
+    let bad = !total.is_finite() || min < 0.0;
+    let valid = |w: f64| (0.0..f64::INFINITY).contains(&w);
+    if bad {
+        let reason = match weights.iter().enumerate().find(|&(_, &w)| !valid(w)) {
+            Some((index, &value)) if value.is_nan() => Degeneracy::NotANumber { index },
+            Some((index, &value)) => Degeneracy::OutOfRange { index, value },
+            // Every weight is valid but the sum overflowed.
+            None => Degeneracy::OutOfRange {
+                index: 0,
+                value: total,
+            },
+        };
+        return Err(Error::InvalidWeights { reason });
+    }
+    if total <= 0.0 {
+        return Err(Error::InvalidWeights {
+            reason: Degeneracy::AllZero,
+        });
+    }
+    let last_positive = weights.iter().rposition(|&w| w > 0.0).unwrap_or(0);
+    Ok(WeightSummary {
+        total,
+        last_positive,
+    })
+}
+
+/// Offspring count of each of `n` particles given ancestor indices (out-of-range ones ignored).
+#[must_use]
+pub fn offspring_counts(ancestors: &[usize], n: usize) -> Vec<usize> {
+    let mut counts = vec![0; n];
+    for &a in ancestors {
+        if let Some(c) = counts.get_mut(a) {
+            *c += 1;
+        }
+    }
+    counts
+}
+
+/// Number of distinct values in `ancestors`, all below `n`; `seen` is a scratch buffer.
+pub(crate) fn count_distinct(ancestors: &[usize], n: usize, seen: &mut Vec<bool>) -> usize {
+    seen.clear();
+    seen.resize(n, false);
+    let mut distinct = 0;
+    for &a in ancestors {
+        if let Some(s) = seen.get_mut(a)
+            && !*s
+        {
+            *s = true;
+            distinct += 1;
+        }
+    }
+    distinct
+}
+
+#[cfg(test)]
+mod tests;

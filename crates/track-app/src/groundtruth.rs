@@ -1,0 +1,455 @@
+//! Target boxes and ellipses, and the OTB ground-truth file `groundtruth_rect.txt`.
+//!
+//! The OTB layout (MODELS.md, "Evaluation protocol") has one line per frame, `x,y,w,h` of the
+//! target's axis-aligned box (top-left corner, width, height, in pixels), separated by commas, tabs
+//! or spaces. Some sequences label only every k-th frame and write `0,0,0,0` elsewhere; those frames
+//! are unlabelled ([`None`]) and left out of every metric.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::{AppError, Result};
+
+/// An axis-aligned box: top-left corner `(x, y)`, width `w` and height `h`, in pixels
+/// (x to the right, y down).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Box2 {
+    /// Left edge.
+    pub x: f64,
+    /// Top edge.
+    pub y: f64,
+    /// Width.
+    pub w: f64,
+    /// Height.
+    pub h: f64,
+}
+
+impl Box2 {
+    /// A box from its top-left corner and size.
+    pub fn new(x: f64, y: f64, w: f64, h: f64) -> Self {
+        Self { x, y, w, h }
+    }
+
+    /// The centre `(x + w/2, y + h/2)`.
+    pub fn centre(&self) -> (f64, f64) {
+        (self.x + 0.5 * self.w, self.y + 0.5 * self.h)
+    }
+
+    /// The area `w·h` (zero for a degenerate box).
+    pub fn area(&self) -> f64 {
+        self.w.max(0.0) * self.h.max(0.0)
+    }
+
+    /// Whether all four numbers are finite.
+    pub fn is_finite(&self) -> bool {
+        self.x.is_finite() && self.y.is_finite() && self.w.is_finite() && self.h.is_finite()
+    }
+
+    /// Intersection over union with `other`, in [0, 1]; 0 when the union is empty.
+    pub fn iou(&self, other: &Box2) -> f64 {
+        let ix = (self.x + self.w).min(other.x + other.w) - self.x.max(other.x);
+        let iy = (self.y + self.h).min(other.y + other.h) - self.y.max(other.y);
+        let inter = ix.max(0.0) * iy.max(0.0);
+        let union = self.area() + other.area() - inter;
+        if union > 0.0 { inter / union } else { 0.0 }
+    }
+
+    /// Euclidean distance between the two centres, in pixels.
+    pub fn centre_distance(&self, other: &Box2) -> f64 {
+        let (ax, ay) = self.centre();
+        let (bx, by) = other.centre();
+        (ax - bx).hypot(ay - by)
+    }
+
+    /// The ellipse inscribed in the box: centre at the box centre, semi-axes `a = w/2` (horizontal)
+    /// and `b = h/2`, angle 0 (MODELS.md: the tracker starts from the ellipse inscribed in the
+    /// first labelled box).
+    pub fn inscribed_ellipse(&self) -> Ellipse {
+        let (cx, cy) = self.centre();
+        Ellipse::new(cx, cy, 0.5 * self.w, 0.5 * self.h, 0.0)
+    }
+
+    /// Checks that the box can start a tracker in a `width`×`height` frame: finite, of positive
+    /// width and height, and with its centre inside the frame (a box may stick out of the frame
+    /// partly, as real targets near the border do, but not lie outside it). `what` names the box in
+    /// the error (for example `--init` or `groundtruth_rect.txt line 1`).
+    ///
+    /// # Errors
+    /// [`AppError::InvalidSetting`] naming `what`, the box and the frame size.
+    pub fn validate_in_frame(&self, width: usize, height: usize, what: &str) -> Result<()> {
+        let shown = format!("{},{},{},{}", self.x, self.y, self.w, self.h);
+        if !self.is_finite() {
+            return Err(AppError::setting(
+                what,
+                format!("box {shown} is not finite"),
+            ));
+        }
+        if self.w <= 0.0 || self.h <= 0.0 {
+            return Err(AppError::setting(
+                what,
+                format!("box {shown} has zero or negative size"),
+            ));
+        }
+        let (cx, cy) = self.centre();
+        if cx < 0.0 || cy < 0.0 || cx >= width as f64 || cy >= height as f64 {
+            return Err(AppError::setting(
+                what,
+                format!(
+                    "box {shown} lies outside the {width}×{height} frame (its centre is outside)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// An ellipse (cx, cy, a, b, θ): semi-axis `a` along (cos θ, sin θ), `b` along (−sin θ, cos θ),
+/// angle in radians (the workspace convention).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Ellipse {
+    /// Centre, x.
+    pub cx: f64,
+    /// Centre, y.
+    pub cy: f64,
+    /// Semi-axis along the angle direction.
+    pub a: f64,
+    /// Semi-axis perpendicular to it.
+    pub b: f64,
+    /// Angle of the `a` axis from the x axis, radians.
+    pub angle: f64,
+}
+
+impl Ellipse {
+    /// An ellipse from its five parameters.
+    pub fn new(cx: f64, cy: f64, a: f64, b: f64, angle: f64) -> Self {
+        Self {
+            cx,
+            cy,
+            a,
+            b,
+            angle,
+        }
+    }
+
+    /// Whether all five numbers are finite.
+    pub fn is_finite(&self) -> bool {
+        self.cx.is_finite()
+            && self.cy.is_finite()
+            && self.a.is_finite()
+            && self.b.is_finite()
+            && self.angle.is_finite()
+    }
+
+    /// The axis-aligned bounding box of the rotated ellipse (the tracker's box, MODELS.md).
+    /// Half-extents: `sqrt(a²cos²θ + b²sin²θ)` and `sqrt(a²sin²θ + b²cos²θ)`.
+    pub fn bounding_box(&self) -> Box2 {
+        let (s, c) = self.angle.sin_cos();
+        let hx = ((self.a * c).powi(2) + (self.b * s).powi(2)).sqrt();
+        let hy = ((self.a * s).powi(2) + (self.b * c).powi(2)).sqrt();
+        Box2::new(self.cx - hx, self.cy - hy, 2.0 * hx, 2.0 * hy)
+    }
+
+    /// The point at parameter `t` (radians): centre + a·cos t·(cos θ, sin θ) + b·sin t·(−sin θ, cos θ).
+    pub fn point(&self, t: f64) -> (f64, f64) {
+        let (s, c) = self.angle.sin_cos();
+        let (u, v) = (self.a * t.cos(), self.b * t.sin());
+        (self.cx + u * c - v * s, self.cy + u * s + v * c)
+    }
+}
+
+/// Parses `N` comma-separated finite numbers from a command-line value.
+fn parse_numbers<const N: usize>(text: &str, name: &str, form: &str) -> Result<[f64; N]> {
+    let fields: Vec<&str> = text.split(',').map(str::trim).collect();
+    if fields.len() != N {
+        return Err(AppError::setting(
+            name,
+            format!("{text:?} should be {N} comma-separated numbers {form}"),
+        ));
+    }
+    let mut out = [0.0; N];
+    for (slot, f) in out.iter_mut().zip(&fields) {
+        *slot = f
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| AppError::setting(name, format!("{f:?} is not a finite number")))?;
+    }
+    Ok(out)
+}
+
+/// Parses a box given on the command line as `x,y,w,h` (for `--init`). The size is checked
+/// against the frame later, by [`Box2::validate_in_frame`].
+///
+/// # Errors
+/// [`AppError::InvalidSetting`] naming `name` (the option): wrong count or a non-finite number.
+pub fn parse_box_arg(text: &str, name: &str) -> Result<Box2> {
+    let [x, y, w, h] = parse_numbers(text, name, "x,y,w,h")?;
+    Ok(Box2::new(x, y, w, h))
+}
+
+/// Parses an ellipse given on the command line as `cx,cy,a,b,angle` (for `--init-ellipse`); the
+/// angle is taken as given (the caller decides its unit). Semi-axes must be positive.
+///
+/// # Errors
+/// [`AppError::InvalidSetting`] naming `name`: wrong count, a non-finite number, or a semi-axis
+/// that is not positive.
+pub fn parse_ellipse_arg(text: &str, name: &str) -> Result<Ellipse> {
+    let [cx, cy, a, b, angle] = parse_numbers(text, name, "cx,cy,a,b,angle")?;
+    if a <= 0.0 || b <= 0.0 {
+        return Err(AppError::setting(
+            name,
+            format!("semi-axes must be positive, got a = {a}, b = {b}"),
+        ));
+    }
+    Ok(Ellipse::new(cx, cy, a, b, angle))
+}
+
+/// Parses one ground-truth line (1-based `line_no` for messages). All-zero or zero-size boxes are
+/// unlabelled frames.
+fn parse_line(text: &str, line_no: usize) -> std::result::Result<Option<Box2>, String> {
+    let fields: Vec<&str> = text
+        .split([',', '\t', ' ', ';'])
+        .map(str::trim)
+        .filter(|f| !f.is_empty())
+        .collect();
+    if fields.len() != 4 {
+        return Err(format!(
+            "line {line_no}: expected 4 numbers x,y,w,h, found {} in {:?}",
+            fields.len(),
+            text.trim()
+        ));
+    }
+    let mut v = [0.0_f64; 4];
+    for (slot, field) in v.iter_mut().zip(&fields) {
+        let parsed: f64 = field
+            .parse()
+            .map_err(|_| format!("line {line_no}: {field:?} is not a number"))?;
+        if !parsed.is_finite() {
+            return Err(format!("line {line_no}: {field:?} is not a finite number"));
+        }
+        *slot = parsed;
+    }
+    let [x, y, w, h] = v;
+    if w < 0.0 || h < 0.0 {
+        return Err(format!(
+            "line {line_no}: negative width or height in {:?}",
+            text.trim()
+        ));
+    }
+    // `0,0,0,0` marks an unlabelled frame; a zero-size box carries no target either, so it is
+    // treated the same way rather than breaking evaluation of a whole sequence.
+    if w == 0.0 || h == 0.0 {
+        return Ok(None);
+    }
+    Ok(Some(Box2::new(x, y, w, h)))
+}
+
+/// Parses the text of a ground-truth file: one entry per line, `None` for unlabelled frames.
+/// Trailing blank lines are ignored; a blank line before the last box is an error (line i belongs
+/// to frame i, so a gap would shift every later label).
+///
+/// # Errors
+/// [`AppError::BadInput`] naming `path` and the 1-based line number: wrong field count, a field
+/// that is not a finite number, a negative size.
+pub fn parse_groundtruth(text: &str, path: &Path) -> Result<Vec<Option<Box2>>> {
+    let lines: Vec<&str> = text.lines().collect();
+    let last = lines.iter().rposition(|l| !l.trim().is_empty());
+    let Some(last) = last else {
+        return Err(AppError::input(path, "the ground-truth file has no boxes"));
+    };
+    lines[..=last]
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            if l.trim().is_empty() {
+                Err(AppError::input(path, format!("line {}: empty line", i + 1)))
+            } else {
+                parse_line(l, i + 1).map_err(|reason| AppError::input(path, reason))
+            }
+        })
+        .collect()
+}
+
+/// Reads and parses a ground-truth file (see [`parse_groundtruth`]).
+///
+/// # Errors
+/// [`AppError::BadInput`] when the file cannot be read or a line is malformed.
+pub fn load_groundtruth(path: &Path) -> Result<Vec<Option<Box2>>> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| AppError::input(path, format!("cannot read ground truth: {e}")))?;
+    parse_groundtruth(&text, path)
+}
+
+/// Checks that the ground truth covers exactly `frames` frames and has at least one labelled box.
+///
+/// # Errors
+/// [`AppError::BadInput`] naming `path` and both counts.
+pub fn check_groundtruth_len(truth: &[Option<Box2>], frames: usize, path: &Path) -> Result<()> {
+    if truth.len() != frames {
+        return Err(AppError::input(
+            path,
+            format!("{} ground-truth lines for {frames} frames", truth.len()),
+        ));
+    }
+    if truth.iter().all(Option::is_none) {
+        return Err(AppError::input(
+            path,
+            "no labelled box (every line is 0,0,0,0)",
+        ));
+    }
+    Ok(())
+}
+
+/// The first labelled frame and its box, if any.
+pub fn first_labelled(truth: &[Option<Box2>]) -> Option<(usize, Box2)> {
+    truth
+        .iter()
+        .enumerate()
+        .find_map(|(i, b)| b.map(|b| (i, b)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn p() -> &'static Path {
+        Path::new("gt.txt")
+    }
+
+    #[test]
+    fn parses_all_separators_and_unlabelled_frames() {
+        let text = "128,46,104,127\n0,0,0,0\n1\t2\t3\t4\n5 6  7 8\n9, 10, 11, 12\n\n\n";
+        let gt = parse_groundtruth(text, p()).unwrap();
+        assert_eq!(gt.len(), 5);
+        assert_eq!(gt[0], Some(Box2::new(128.0, 46.0, 104.0, 127.0)));
+        assert_eq!(gt[1], None);
+        assert_eq!(gt[2], Some(Box2::new(1.0, 2.0, 3.0, 4.0)));
+        assert_eq!(gt[3], Some(Box2::new(5.0, 6.0, 7.0, 8.0)));
+        assert_eq!(gt[4], Some(Box2::new(9.0, 10.0, 11.0, 12.0)));
+        assert_eq!(
+            first_labelled(&gt),
+            Some((0, Box2::new(128.0, 46.0, 104.0, 127.0)))
+        );
+    }
+
+    #[test]
+    fn malformed_lines_name_the_line() {
+        let cases = [
+            ("1,2,3,4\n1,2,3\n", "line 2", "expected 4 numbers"),
+            ("1,2,3,4,5\n", "line 1", "found 5"),
+            ("1,2,3,4\n1,2,NaN,4\n", "line 2", "not a finite number"),
+            ("1,2,x,4\n", "line 1", "not a number"),
+            ("1,2,-3,4\n", "line 1", "negative"),
+            ("1,2,3,4\n\n1,2,3,4\n", "line 2", "empty line"),
+        ];
+        for (text, line, what) in cases {
+            let err = parse_groundtruth(text, p()).unwrap_err();
+            let msg = err.to_string();
+            assert!(msg.starts_with("gt.txt: "), "{msg}");
+            assert!(
+                msg.contains(line) && msg.contains(what),
+                "{text:?} gave {msg}"
+            );
+            assert_eq!(err.exit_code(), 3);
+        }
+        assert!(parse_groundtruth("\n \n", p()).is_err());
+    }
+
+    #[test]
+    fn length_check_and_all_unlabelled() {
+        let gt = vec![Some(Box2::new(0.0, 0.0, 1.0, 1.0)), None];
+        assert!(check_groundtruth_len(&gt, 2, p()).is_ok());
+        let msg = check_groundtruth_len(&gt, 3, p()).unwrap_err().to_string();
+        assert!(msg.contains("2 ground-truth lines for 3 frames"), "{msg}");
+        assert!(check_groundtruth_len(&[None, None], 2, p()).is_err());
+    }
+
+    #[test]
+    fn iou_and_centre_by_hand() {
+        let a = Box2::new(0.0, 0.0, 10.0, 10.0);
+        let b = Box2::new(5.0, 0.0, 10.0, 10.0);
+        // Intersection 5×10 = 50, union 100 + 100 − 50 = 150.
+        assert_relative_eq!(a.iou(&b), 50.0 / 150.0, epsilon = 1e-15);
+        assert_relative_eq!(a.iou(&a), 1.0);
+        assert_eq!(a.iou(&Box2::new(20.0, 20.0, 1.0, 1.0)), 0.0);
+        assert_eq!(a.centre(), (5.0, 5.0));
+        assert_relative_eq!(a.centre_distance(&Box2::new(3.0, 4.0, 10.0, 10.0)), 5.0);
+        // Degenerate boxes have no union: defined as 0, never NaN.
+        let z = Box2::new(1.0, 1.0, 0.0, 0.0);
+        assert_eq!(z.iou(&z), 0.0);
+    }
+
+    #[test]
+    fn ellipse_box_round_trip_and_rotation() {
+        let b = Box2::new(128.0, 46.0, 104.0, 127.0);
+        let e = b.inscribed_ellipse();
+        assert_eq!(e, Ellipse::new(180.0, 109.5, 52.0, 63.5, 0.0));
+        let back = e.bounding_box();
+        assert_relative_eq!(back.x, b.x, epsilon = 1e-12);
+        assert_relative_eq!(back.w, b.w, epsilon = 1e-12);
+        // Rotating by 90° swaps the extents.
+        let r = Ellipse::new(0.0, 0.0, 10.0, 4.0, std::f64::consts::FRAC_PI_2).bounding_box();
+        assert_relative_eq!(r.w, 8.0, epsilon = 1e-12);
+        assert_relative_eq!(r.h, 20.0, epsilon = 1e-12);
+        // At 45° both half-extents are sqrt((100 + 16)/2).
+        let d = Ellipse::new(0.0, 0.0, 10.0, 4.0, std::f64::consts::FRAC_PI_4).bounding_box();
+        assert_relative_eq!(d.w, 2.0 * 58.0_f64.sqrt(), epsilon = 1e-12);
+        // The parametric point at t = 0 is the end of the a axis.
+        let (x, y) = Ellipse::new(1.0, 2.0, 10.0, 4.0, std::f64::consts::FRAC_PI_2).point(0.0);
+        assert_relative_eq!(x, 1.0, epsilon = 1e-12);
+        assert_relative_eq!(y, 12.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn command_line_boxes_and_ellipses() {
+        assert_eq!(
+            parse_box_arg("1, 2,3.5,4", "--init").unwrap(),
+            Box2::new(1.0, 2.0, 3.5, 4.0)
+        );
+        let e = parse_ellipse_arg("10,20,5,3,0.5", "--init-ellipse").unwrap();
+        assert_eq!(e, Ellipse::new(10.0, 20.0, 5.0, 3.0, 0.5));
+        for (text, what) in [
+            ("1,2,3", "4 comma-separated"),
+            ("1,2,x,4", "\"x\""),
+            ("1,2,inf,4", "finite"),
+        ] {
+            let err = parse_box_arg(text, "--init").unwrap_err();
+            assert!(
+                err.to_string().contains("--init") && err.to_string().contains(what),
+                "{err}"
+            );
+            assert_eq!(err.exit_code(), 2);
+        }
+        assert!(parse_ellipse_arg("1,2,0,3,0", "--init-ellipse").is_err());
+        assert!(parse_ellipse_arg("1,2,3,4", "--init-ellipse").is_err());
+    }
+
+    #[test]
+    fn validation_against_the_frame() {
+        let ok = Box2::new(10.0, 10.0, 20.0, 20.0);
+        assert!(ok.validate_in_frame(320, 240, "--init").is_ok());
+        // Partly outside is accepted (targets at the border).
+        assert!(
+            Box2::new(-5.0, -5.0, 20.0, 20.0)
+                .validate_in_frame(320, 240, "--init")
+                .is_ok()
+        );
+        for (b, what) in [
+            (Box2::new(10.0, 10.0, 0.0, 20.0), "zero or negative size"),
+            (Box2::new(10.0, 10.0, 20.0, -1.0), "zero or negative size"),
+            (
+                Box2::new(400.0, 10.0, 20.0, 20.0),
+                "outside the 320×240 frame",
+            ),
+            (Box2::new(10.0, -50.0, 20.0, 20.0), "outside"),
+            (Box2::new(f64::NAN, 1.0, 2.0, 2.0), "not finite"),
+        ] {
+            let err = b.validate_in_frame(320, 240, "--init").unwrap_err();
+            let msg = err.to_string();
+            assert!(msg.contains("--init") && msg.contains(what), "{msg}");
+            assert_eq!(err.exit_code(), 2);
+        }
+    }
+}

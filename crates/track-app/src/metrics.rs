@@ -1,0 +1,312 @@
+//! The evaluation protocol of MODELS.md ("Evaluation protocol", after O Table 1).
+//!
+//! - Centre error: distance between the centres of the estimated and the true box, in pixels.
+//! - Precision at 20 px: share of labelled frames whose centre error is at most 20 px.
+//! - Success curve: for each IoU threshold t = 0, 0.05, …, 1 (21 values), the share of labelled
+//!   frames whose IoU is strictly above t (the OTB toolkit's convention, so a perfect tracker scores
+//!   0 at t = 1); its AUC is the mean of the 21 values.
+//! - Trial failure: a trial fails once the IoU stays below 0.2 for 5 consecutive labelled frames.
+//!
+//! Only labelled frames count: sequences labelled every k-th frame (`0,0,0,0` elsewhere) are
+//! evaluated on their labelled frames alone, and "consecutive" means consecutive labelled frames.
+
+use serde::{Deserialize, Serialize};
+
+use crate::groundtruth::Box2;
+use crate::{AppError, Result};
+
+/// Centre-error threshold of the precision score, pixels.
+pub const PRECISION_THRESHOLD_PX: f64 = 20.0;
+/// IoU below which a labelled frame counts towards a trial failure.
+pub const FAILURE_IOU: f64 = 0.2;
+/// Number of consecutive labelled frames below [`FAILURE_IOU`] that make a trial fail.
+pub const FAILURE_RUN: usize = 5;
+/// Number of IoU thresholds of the success curve (0, 0.05, …, 1).
+pub const SUCCESS_STEPS: usize = 21;
+
+/// The IoU thresholds of the success curve: 0, 0.05, …, 1.
+pub fn success_thresholds() -> [f64; SUCCESS_STEPS] {
+    std::array::from_fn(|i| i as f64 / (SUCCESS_STEPS - 1) as f64)
+}
+
+/// Share of `errors` at most `threshold` (0 when `errors` is empty).
+pub fn precision_at(errors: &[f64], threshold: f64) -> f64 {
+    if errors.is_empty() {
+        return 0.0;
+    }
+    errors.iter().filter(|&&e| e <= threshold).count() as f64 / errors.len() as f64
+}
+
+/// The success curve: for each threshold of [`success_thresholds`], the share of `ious` strictly
+/// above it (all zeros when `ious` is empty).
+pub fn success_curve(ious: &[f64]) -> [f64; SUCCESS_STEPS] {
+    let n = ious.len().max(1) as f64;
+    success_thresholds().map(|t| ious.iter().filter(|&&v| v > t).count() as f64 / n)
+}
+
+/// Area under the success curve: the mean of its values.
+pub fn success_auc(ious: &[f64]) -> f64 {
+    success_curve(ious).iter().sum::<f64>() / SUCCESS_STEPS as f64
+}
+
+/// Position (in `ious`, the per-labelled-frame IoUs in order) at which a trial fails: the
+/// [`FAILURE_RUN`]-th consecutive IoU below [`FAILURE_IOU`]; `None` when it never fails.
+pub fn first_failure(ious: &[f64]) -> Option<usize> {
+    let mut run = 0;
+    for (i, &v) in ious.iter().enumerate() {
+        run = if v < FAILURE_IOU { run + 1 } else { 0 };
+        if run == FAILURE_RUN {
+            return Some(i);
+        }
+    }
+    None
+}
+
+/// Frames per second.
+///
+/// # Errors
+/// [`AppError::Computation`] when `seconds` is not a positive finite number.
+pub fn frames_per_second(frames: usize, seconds: f64) -> Result<f64> {
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return Err(AppError::computation(
+            "frames per second",
+            format!("elapsed time {seconds} s is not positive"),
+        ));
+    }
+    Ok(frames as f64 / seconds)
+}
+
+/// Share of trials that never failed (O Table 1's success rate); 0 for no trials.
+pub fn success_rate(failed: &[bool]) -> f64 {
+    if failed.is_empty() {
+        return 0.0;
+    }
+    failed.iter().filter(|&&f| !f).count() as f64 / failed.len() as f64
+}
+
+/// The scores of one tracked sequence against its ground truth.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SequenceMetrics {
+    /// Frames tracked.
+    pub frames: usize,
+    /// Frames with a ground-truth box (the only ones scored).
+    pub labelled_frames: usize,
+    /// Share of labelled frames with centre error ≤ 20 px.
+    pub precision_20: f64,
+    /// Area under the success curve.
+    pub success_auc: f64,
+    /// The success curve itself (thresholds 0, 0.05, …, 1).
+    pub success_curve: Vec<f64>,
+    /// Mean IoU over labelled frames.
+    pub mean_iou: f64,
+    /// Mean centre error over labelled frames, pixels.
+    pub mean_centre_error: f64,
+    /// Frame index (0-based, in the whole sequence) at which the trial failed, if it did.
+    pub failed_at_frame: Option<usize>,
+    /// Frames per second of the tracker (`None` when no timing was given).
+    pub fps: Option<f64>,
+}
+
+/// Scores `estimates` (one box per frame) against `truth` (one entry per frame, `None` for
+/// unlabelled frames). `seconds` is the tracking time, for frames/s.
+///
+/// # Errors
+/// [`AppError::Computation`] when the lengths differ, nothing is labelled, an estimate on a
+/// labelled frame is not finite (named by frame), or `seconds` is not positive.
+pub fn evaluate(
+    estimates: &[Box2],
+    truth: &[Option<Box2>],
+    seconds: Option<f64>,
+) -> Result<SequenceMetrics> {
+    let ctx = "evaluation";
+    if estimates.len() != truth.len() {
+        return Err(AppError::computation(
+            ctx,
+            format!(
+                "{} estimated boxes for {} ground-truth frames",
+                estimates.len(),
+                truth.len()
+            ),
+        ));
+    }
+    let mut ious = Vec::new();
+    let mut errors = Vec::new();
+    let mut frames_of = Vec::new();
+    for (i, (est, gt)) in estimates.iter().zip(truth).enumerate() {
+        let Some(gt) = gt else { continue };
+        if !est.is_finite() {
+            return Err(AppError::computation(
+                ctx,
+                format!("the estimated box of frame {} is not finite", i + 1),
+            ));
+        }
+        ious.push(est.iou(gt));
+        errors.push(est.centre_distance(gt));
+        frames_of.push(i);
+    }
+    if ious.is_empty() {
+        return Err(AppError::computation(ctx, "no labelled frame to score"));
+    }
+    let n = ious.len() as f64;
+    Ok(SequenceMetrics {
+        frames: estimates.len(),
+        labelled_frames: ious.len(),
+        precision_20: precision_at(&errors, PRECISION_THRESHOLD_PX),
+        success_auc: success_auc(&ious),
+        success_curve: success_curve(&ious).to_vec(),
+        mean_iou: ious.iter().sum::<f64>() / n,
+        mean_centre_error: errors.iter().sum::<f64>() / n,
+        failed_at_frame: first_failure(&ious).map(|k| frames_of[k]),
+        fps: seconds
+            .map(|s| frames_per_second(estimates.len(), s))
+            .transpose()?,
+    })
+}
+
+/// The mean of each score over several sequences (the last row of `track eval otb`): precision,
+/// AUC, mean IoU, centre error and frames/s are averaged per sequence (each sequence weighs the
+/// same); frame counts are summed; `failed_at_frame` is `None`. `None` for an empty list.
+pub fn mean_metrics(all: &[SequenceMetrics]) -> Option<SequenceMetrics> {
+    if all.is_empty() {
+        return None;
+    }
+    let n = all.len() as f64;
+    let mean = |f: &dyn Fn(&SequenceMetrics) -> f64| all.iter().map(f).sum::<f64>() / n;
+    let fps = all
+        .iter()
+        .map(|m| m.fps)
+        .collect::<Option<Vec<f64>>>()
+        .map(|v| v.iter().sum::<f64>() / n);
+    Some(SequenceMetrics {
+        frames: all.iter().map(|m| m.frames).sum(),
+        labelled_frames: all.iter().map(|m| m.labelled_frames).sum(),
+        precision_20: mean(&|m| m.precision_20),
+        success_auc: mean(&|m| m.success_auc),
+        success_curve: (0..SUCCESS_STEPS)
+            .map(|i| mean(&|m| m.success_curve.get(i).copied().unwrap_or(0.0)))
+            .collect(),
+        mean_iou: mean(&|m| m.mean_iou),
+        mean_centre_error: mean(&|m| m.mean_centre_error),
+        failed_at_frame: None,
+        fps,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn thresholds_are_exact_twentieths() {
+        let t = success_thresholds();
+        assert_eq!(t[0], 0.0);
+        assert_eq!(t[20], 1.0);
+        assert_relative_eq!(t[1], 0.05, epsilon = 1e-15);
+        assert_relative_eq!(t[14], 0.7, epsilon = 1e-15);
+    }
+
+    #[test]
+    fn precision_by_hand() {
+        // 20 is included (≤), 20.5 is not.
+        assert_eq!(precision_at(&[0.0, 20.0, 20.5, 100.0], 20.0), 0.5);
+        assert_eq!(precision_at(&[], 20.0), 0.0);
+    }
+
+    #[test]
+    fn success_curve_and_auc_by_hand() {
+        // IoU 1: above every threshold but 1 → 20 of 21. IoU 0.5: above 0, 0.05, …, 0.45 → 10.
+        // IoU 0: above none → 0. AUC = (20 + 10 + 0) / (3 · 21) = 30/63.
+        let ious = [1.0, 0.5, 0.0];
+        let curve = success_curve(&ious);
+        assert_relative_eq!(curve[0], 2.0 / 3.0, epsilon = 1e-15);
+        assert_relative_eq!(curve[10], 1.0 / 3.0, epsilon = 1e-15);
+        assert_eq!(curve[20], 0.0);
+        assert_relative_eq!(success_auc(&ious), 30.0 / 63.0, epsilon = 1e-15);
+        // A perfect tracker scores 20/21 (OTB's strict > at t = 1).
+        assert_relative_eq!(success_auc(&[1.0; 4]), 20.0 / 21.0, epsilon = 1e-15);
+        assert_eq!(success_auc(&[]), 0.0);
+    }
+
+    #[test]
+    fn failure_needs_five_consecutive_low_frames() {
+        let low = 0.1;
+        let ok = 0.5;
+        assert_eq!(
+            first_failure(&[ok, low, low, low, low, ok, low, low, low, low]),
+            None
+        );
+        assert_eq!(first_failure(&[ok, low, low, low, low, low, ok]), Some(5));
+        // 0.2 itself is not below the threshold.
+        assert_eq!(first_failure(&[0.2; 10]), None);
+        assert_eq!(first_failure(&[0.199_999; 5]), Some(4));
+        assert_eq!(success_rate(&[false, true, false, false]), 0.75);
+        assert_eq!(success_rate(&[]), 0.0);
+    }
+
+    #[test]
+    fn evaluate_skips_unlabelled_frames() {
+        let gt_box = Box2::new(0.0, 0.0, 10.0, 10.0);
+        let shifted = Box2::new(5.0, 0.0, 10.0, 10.0); // IoU 1/3, centre error 5
+        let far = Box2::new(100.0, 100.0, 10.0, 10.0); // IoU 0, centre error 100√2
+        // Unlabelled frames carry garbage estimates that must not count.
+        let estimates = [gt_box, far, shifted, far, far];
+        let truth = [Some(gt_box), None, Some(gt_box), Some(gt_box), None];
+        let m = evaluate(&estimates, &truth, Some(2.5)).unwrap();
+        assert_eq!(m.frames, 5);
+        assert_eq!(m.labelled_frames, 3);
+        assert_relative_eq!(m.precision_20, 2.0 / 3.0, epsilon = 1e-15);
+        assert_relative_eq!(m.mean_iou, (1.0 + 1.0 / 3.0) / 3.0, epsilon = 1e-15);
+        assert_relative_eq!(
+            m.mean_centre_error,
+            (5.0 + 100.0 * 2f64.sqrt()) / 3.0,
+            epsilon = 1e-12
+        );
+        // IoU 1 → 20 thresholds, IoU 1/3 → above 0 … 0.30 → 7, IoU 0 → 0. AUC = 27/63.
+        assert_relative_eq!(m.success_auc, 27.0 / 63.0, epsilon = 1e-15);
+        assert_eq!(m.fps, Some(2.0));
+        assert_eq!(m.failed_at_frame, None);
+    }
+
+    #[test]
+    fn evaluate_reports_failure_frame_and_bad_inputs() {
+        let gt = Box2::new(0.0, 0.0, 10.0, 10.0);
+        let far = Box2::new(50.0, 50.0, 10.0, 10.0);
+        // Labelled every other frame (0, 2, 4, …); the 5th labelled miss is at frame index 8.
+        let estimates = vec![far; 12];
+        let truth: Vec<_> = (0..12).map(|i| (i % 2 == 0).then_some(gt)).collect();
+        let m = evaluate(&estimates, &truth, None).unwrap();
+        assert_eq!(m.failed_at_frame, Some(8));
+        assert_eq!(m.fps, None);
+        assert!(evaluate(&estimates[..3], &truth, None).is_err());
+        assert!(
+            evaluate(&[far], &[None], None)
+                .unwrap_err()
+                .to_string()
+                .contains("no labelled")
+        );
+        let nan = Box2::new(f64::NAN, 0.0, 1.0, 1.0);
+        let msg = evaluate(&[gt, nan], &[Some(gt), Some(gt)], None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("frame 2") && msg.contains("not finite"),
+            "{msg}"
+        );
+        assert!(evaluate(&[gt], &[Some(gt)], Some(0.0)).is_err());
+        assert!(frames_per_second(3, f64::NAN).is_err());
+    }
+
+    #[test]
+    fn mean_over_sequences() {
+        let gt = Box2::new(0.0, 0.0, 10.0, 10.0);
+        let a = evaluate(&[gt], &[Some(gt)], Some(1.0)).unwrap();
+        let b = evaluate(&[Box2::new(40.0, 0.0, 10.0, 10.0)], &[Some(gt)], Some(0.5)).unwrap();
+        let m = mean_metrics(&[a, b]).unwrap();
+        assert_eq!(m.precision_20, 0.5);
+        assert_relative_eq!(m.success_auc, 10.0 / 21.0, epsilon = 1e-15);
+        assert_eq!(m.fps, Some(1.5));
+        assert_eq!(m.frames, 2);
+        assert!(mean_metrics(&[]).is_none());
+    }
+}

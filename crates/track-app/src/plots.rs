@@ -1,0 +1,497 @@
+//! SVG plots over time of what the tracker estimated (as in W Fig. 11, 14, 16): the clutter class
+//! β̂ with its class probabilities, the clutter density λ̂, the occlusion γ̂, the tracker status α̂
+//! with its probabilities, and the effective sample size.
+//!
+//! Each figure is rendered to a `String` with plotters' SVG backend, so that the report can inline
+//! it, and written atomically by [`write_figures`]. A figure whose quantity the tracker does not
+//! estimate (no β for Odobez's trackers, say) is left out rather than drawn empty.
+
+use std::path::{Path, PathBuf};
+
+use plotters::prelude::*;
+
+use crate::output::write_atomic;
+use crate::record::{FrameRecord, TrackerStatus};
+use crate::render::{CLUTTER, LOCKED, LOST, PARTIAL};
+use crate::{AppError, Result};
+
+/// Size of every figure, pixels.
+pub const FIGURE_SIZE: (u32, u32) = (720, 360);
+
+/// One rendered figure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Figure {
+    /// File stem: `beta`, `lambda`, `gamma`, `alpha` or `ess`.
+    pub name: &'static str,
+    /// Human-readable title.
+    pub title: String,
+    /// The SVG document.
+    pub svg: String,
+}
+
+/// One line of a chart.
+struct Series {
+    label: String,
+    colour: RGBColor,
+    points: Vec<(f64, f64)>,
+}
+
+fn rgb(c: [u8; 3]) -> RGBColor {
+    RGBColor(c[0], c[1], c[2])
+}
+
+fn plot_err(e: impl std::fmt::Display) -> AppError {
+    AppError::computation("plotting", e)
+}
+
+/// Checks a value before it is plotted, naming the frame and quantity when it is not finite.
+fn finite(v: f64, frame: usize, what: &str) -> Result<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(AppError::computation(
+            "plotting",
+            format!("frame {}: {what} is {v}", frame + 1),
+        ))
+    }
+}
+
+/// Draws one panel: a titled line chart with the given y range and optional y-tick names.
+fn panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    y_label: &str,
+    x_max: f64,
+    y_range: (f64, f64),
+    y_names: Option<&[&str]>,
+    series: &[Series],
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 18))
+        .margin(8)
+        .margin_right(24)
+        .x_label_area_size(32)
+        .y_label_area_size(56)
+        .build_cartesian_2d(1.0..x_max.max(2.0), y_range.0..y_range.1)
+        .map_err(plot_err)?;
+    let names: Vec<String> = y_names
+        .map(|n| n.iter().map(|s| (*s).to_string()).collect())
+        .unwrap_or_default();
+    // Enough decimals to tell the ticks apart: none for a span of 100, two for a span of 0.2.
+    let span = (y_range.1 - y_range.0).abs().max(1e-9);
+    let decimals = ((-span.log10()).ceil() + 1.0).clamp(0.0, 4.0) as usize;
+    let fmt = |v: &f64| {
+        if names.is_empty() {
+            format!("{v:.decimals$}")
+        } else {
+            let i = v.round();
+            if (v - i).abs() < 1e-6 && i >= 0.0 {
+                names.get(i as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        }
+    };
+    let mut mesh = chart.configure_mesh();
+    let frame_fmt = |v: &f64| format!("{v:.0}");
+    mesh.x_desc("frame")
+        .y_desc(y_label)
+        .x_label_formatter(&frame_fmt)
+        .y_label_formatter(&fmt)
+        .light_line_style(WHITE);
+    if !names.is_empty() {
+        mesh.y_labels(names.len());
+    }
+    mesh.draw().map_err(plot_err)?;
+    for s in series {
+        let colour = s.colour;
+        chart
+            .draw_series(LineSeries::new(
+                s.points.iter().copied(),
+                colour.stroke_width(2),
+            ))
+            .map_err(plot_err)?
+            .label(s.label.clone())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+            });
+    }
+    if series.len() > 1 || !series.iter().all(|s| s.label.is_empty()) {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(plot_err)?;
+    }
+    Ok(())
+}
+
+/// One panel of a figure: title, y label, y range, optional y-tick names, lines.
+type Panel<'a> = (
+    &'a str,
+    &'a str,
+    (f64, f64),
+    Option<&'a [&'a str]>,
+    Vec<Series>,
+);
+
+/// Renders one or two stacked panels into an SVG string.
+fn render(panels: &[Panel<'_>], x_max: f64) -> Result<String> {
+    let mut svg = String::new();
+    {
+        let size = (FIGURE_SIZE.0, FIGURE_SIZE.1 * panels.len() as u32);
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let areas = root.split_evenly((panels.len(), 1));
+        for (area, (title, y_label, y_range, names, series)) in areas.iter().zip(panels) {
+            panel(area, title, y_label, x_max, *y_range, *names, series)?;
+        }
+        root.present().map_err(plot_err)?;
+    }
+    Ok(svg)
+}
+
+/// The x coordinate of a record: its 1-based frame number.
+fn fx(r: &FrameRecord) -> f64 {
+    (r.frame + 1) as f64
+}
+
+fn x_max(records: &[FrameRecord]) -> f64 {
+    records.iter().map(fx).fold(1.0, f64::max)
+}
+
+/// A y range covering `values` with a 5 % margin (and a unit range when they are all equal).
+fn y_range(values: impl Iterator<Item = f64>, floor: Option<f64>) -> (f64, f64) {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+        (l.min(v), h.max(v))
+    });
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let pad = if hi > lo {
+        0.05 * (hi - lo)
+    } else {
+        0.5 * hi.abs().max(1.0)
+    };
+    let lo = floor.map_or(lo - pad, |f| (lo - pad).max(f));
+    (lo, hi + pad)
+}
+
+/// β̂ over time (top) and the posterior probability of each clutter class (bottom); `None` when
+/// no record has β.
+///
+/// # Errors
+/// [`AppError::Computation`] for a non-finite probability (naming the frame) or a plotting failure.
+pub fn plot_beta(records: &[FrameRecord]) -> Result<Option<Figure>> {
+    let k = records
+        .iter()
+        .map(|r| r.beta_probs.len())
+        .max()
+        .unwrap_or(0);
+    let k = k.max(
+        records
+            .iter()
+            .filter_map(|r| r.beta_hat)
+            .map(|b| b + 1)
+            .max()
+            .unwrap_or(0),
+    );
+    if k == 0 {
+        return Ok(None);
+    }
+    let hat = Series {
+        label: String::new(),
+        colour: RGBColor(30, 30, 30),
+        points: records
+            .iter()
+            .filter_map(|r| r.beta_hat.map(|b| (fx(r), b as f64)))
+            .collect(),
+    };
+    let mut probs = Vec::with_capacity(k);
+    for c in 0..k {
+        let mut points = Vec::new();
+        for r in records {
+            if let Some(&p) = r.beta_probs.get(c) {
+                points.push((fx(r), finite(p, r.frame, "a clutter-class probability")?));
+            }
+        }
+        probs.push(Series {
+            label: format!("P(β = {c})"),
+            colour: rgb(CLUTTER[c % CLUTTER.len()]),
+            points,
+        });
+    }
+    let names: Vec<String> = (0..k).map(|c| format!("β={c}")).collect();
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    let svg = render(
+        &[
+            (
+                "estimated clutter class β̂",
+                "β̂",
+                (-0.5, k as f64 - 0.5),
+                Some(&names),
+                vec![hat],
+            ),
+            (
+                "clutter-class probabilities",
+                "probability",
+                (0.0, 1.0),
+                None,
+                probs,
+            ),
+        ],
+        x_max(records),
+    )?;
+    Ok(Some(Figure {
+        name: "beta",
+        title: "Clutter class β̂".into(),
+        svg,
+    }))
+}
+
+/// A single-series figure of an optional per-frame value; `None` when no record has it.
+fn scalar_figure(
+    records: &[FrameRecord],
+    name: &'static str,
+    title: &str,
+    y_label: &str,
+    get: impl Fn(&FrameRecord) -> Option<f64>,
+    fixed_range: Option<(f64, f64)>,
+    colour: RGBColor,
+) -> Result<Option<Figure>> {
+    let mut points = Vec::new();
+    for r in records {
+        if let Some(v) = get(r) {
+            points.push((fx(r), finite(v, r.frame, y_label)?));
+        }
+    }
+    if points.is_empty() {
+        return Ok(None);
+    }
+    let range = fixed_range.unwrap_or_else(|| y_range(points.iter().map(|p| p.1), Some(0.0)));
+    let series = vec![Series {
+        label: String::new(),
+        colour,
+        points,
+    }];
+    let svg = render(&[(title, y_label, range, None, series)], x_max(records))?;
+    Ok(Some(Figure {
+        name,
+        title: title.to_string(),
+        svg,
+    }))
+}
+
+/// λ̂ (clutter density, edges per pixel) over time; `None` when no record has it.
+///
+/// # Errors
+/// As [`plot_beta`].
+pub fn plot_lambda(records: &[FrameRecord]) -> Result<Option<Figure>> {
+    scalar_figure(
+        records,
+        "lambda",
+        "clutter density λ̂ (edges per pixel)",
+        "λ̂",
+        |r| r.lambda_hat,
+        None,
+        RGBColor(60, 90, 200),
+    )
+}
+
+/// γ̂ (occlusion, W Eq. 14) over time, on [0, 1]; `None` when no record has it.
+///
+/// # Errors
+/// As [`plot_beta`].
+pub fn plot_gamma(records: &[FrameRecord]) -> Result<Option<Figure>> {
+    scalar_figure(
+        records,
+        "gamma",
+        "occlusion γ̂",
+        "γ̂",
+        |r| r.gamma_hat,
+        Some((0.0, 1.0)),
+        RGBColor(160, 60, 160),
+    )
+}
+
+/// The effective sample size over time; `None` for no records.
+///
+/// # Errors
+/// As [`plot_beta`].
+pub fn plot_ess(records: &[FrameRecord]) -> Result<Option<Figure>> {
+    scalar_figure(
+        records,
+        "ess",
+        "effective sample size",
+        "ESS",
+        |r| Some(r.ess),
+        None,
+        RGBColor(30, 30, 30),
+    )
+}
+
+/// α̂ over time (top: locked, partial, lost) and the probability of each status (bottom); `None`
+/// when no record has α.
+///
+/// # Errors
+/// As [`plot_beta`].
+pub fn plot_alpha(records: &[FrameRecord]) -> Result<Option<Figure>> {
+    let has = records
+        .iter()
+        .any(|r| r.alpha_hat.is_some() || !r.alpha_probs.is_empty());
+    if !has {
+        return Ok(None);
+    }
+    let hat = Series {
+        label: String::new(),
+        colour: RGBColor(30, 30, 30),
+        points: records
+            .iter()
+            .filter_map(|r| r.alpha_hat.map(|a| (fx(r), a.index() as f64)))
+            .collect(),
+    };
+    let mut probs = Vec::new();
+    for (status, colour) in TrackerStatus::ALL.iter().zip([LOCKED, PARTIAL, LOST]) {
+        let mut points = Vec::new();
+        for r in records {
+            if let Some(&p) = r.alpha_probs.get(status.index()) {
+                points.push((fx(r), finite(p, r.frame, "a status probability")?));
+            }
+        }
+        probs.push(Series {
+            label: format!("P({})", status.name()),
+            colour: rgb(colour),
+            points,
+        });
+    }
+    let names = TrackerStatus::ALL.map(TrackerStatus::name);
+    let svg = render(
+        &[
+            (
+                "tracker status α̂",
+                "α̂",
+                (-0.5, 2.5),
+                Some(&names),
+                vec![hat],
+            ),
+            (
+                "status probabilities",
+                "probability",
+                (0.0, 1.0),
+                None,
+                probs,
+            ),
+        ],
+        x_max(records),
+    )?;
+    Ok(Some(Figure {
+        name: "alpha",
+        title: "Tracker status α̂".into(),
+        svg,
+    }))
+}
+
+/// Every figure the records have data for, in the order β̂, λ̂, γ̂, α̂, ESS.
+///
+/// # Errors
+/// As [`plot_beta`].
+pub fn all_figures(records: &[FrameRecord]) -> Result<Vec<Figure>> {
+    let mut out = Vec::new();
+    for f in [plot_beta, plot_lambda, plot_gamma, plot_alpha, plot_ess] {
+        out.extend(f(records)?);
+    }
+    Ok(out)
+}
+
+/// Writes each figure as `DIR/NAME.svg` atomically; returns the paths written.
+///
+/// # Errors
+/// [`AppError::Write`].
+pub fn write_figures(dir: &Path, figures: &[Figure]) -> Result<Vec<PathBuf>> {
+    figures
+        .iter()
+        .map(|f| {
+            let path = dir.join(format!("{}.svg", f.name));
+            write_atomic(&path, f.svg.as_bytes()).map(|()| path)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::groundtruth::Ellipse;
+
+    fn records(full: bool) -> Vec<FrameRecord> {
+        (0..40)
+            .map(|i| {
+                let mut r = FrameRecord::new(
+                    i,
+                    Ellipse::new(50.0, 50.0, 10.0, 8.0, 0.0),
+                    100.0 + i as f64,
+                    2.0,
+                );
+                if full {
+                    let b = (i / 15) % 3;
+                    r.beta_hat = Some(b);
+                    r.beta_probs = (0..3).map(|c| if c == b { 0.8 } else { 0.1 }).collect();
+                    r.lambda_hat = Some([0.01, 0.0824, 0.2144][b]);
+                    r.gamma_hat = Some(i as f64 / 40.0);
+                    r.alpha_hat = Some(TrackerStatus::ALL[b]);
+                    r.alpha_probs = vec![0.6, 0.3, 0.1];
+                }
+                r
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_figure_for_a_switching_tracker() {
+        let figs = all_figures(&records(true)).unwrap();
+        let names: Vec<&str> = figs.iter().map(|f| f.name).collect();
+        assert_eq!(names, ["beta", "lambda", "gamma", "alpha", "ess"]);
+        for f in &figs {
+            assert!(
+                f.svg.starts_with("<svg") && f.svg.trim_end().ends_with("</svg>"),
+                "{}",
+                f.name
+            );
+            assert!(f.svg.contains("<polyline"), "{} has no line", f.name);
+            assert!(f.svg.contains("frame"), "{} has no axis label", f.name);
+        }
+        let beta = &figs[0].svg;
+        assert!(beta.contains("P(β = 2)") && beta.contains("β=1"));
+        assert!(figs[3].svg.contains("partial"));
+    }
+
+    #[test]
+    fn absent_quantities_have_no_figure() {
+        let figs = all_figures(&records(false)).unwrap();
+        assert_eq!(figs.len(), 1);
+        assert_eq!(figs[0].name, "ess");
+        assert!(all_figures(&[]).unwrap().is_empty());
+    }
+
+    #[test]
+    fn nan_is_reported_with_its_frame() {
+        let mut rs = records(true);
+        rs[7].lambda_hat = Some(f64::NAN);
+        let msg = plot_lambda(&rs).unwrap_err().to_string();
+        assert!(msg.contains("frame 8"), "{msg}");
+    }
+
+    #[test]
+    fn figures_are_written_atomically() {
+        let dir = tempfile::tempdir().unwrap();
+        let figs = all_figures(&records(true)).unwrap();
+        let paths = write_figures(dir.path(), &figs).unwrap();
+        assert_eq!(paths.len(), 5);
+        assert_eq!(std::fs::read_to_string(&paths[4]).unwrap(), figs[4].svg);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 5);
+    }
+}

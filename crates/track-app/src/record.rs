@@ -1,0 +1,470 @@
+//! Per-frame tracking records and the files written from them: `track.csv`, `boxes.txt` and
+//! `summary.json`. Every file is written atomically, and a NaN or infinity is never written: it is
+//! reported as an error naming the frame and the column.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::groundtruth::{Box2, Ellipse};
+use crate::metrics::SequenceMetrics;
+use crate::output::write_atomic;
+use crate::{AppError, Result};
+
+/// The tracker's self-evaluation α (W §6.3): locked, partially occluded, or lost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TrackerStatus {
+    /// Locked on the target.
+    Locked,
+    /// Partially occluded.
+    Partial,
+    /// Lost.
+    Lost,
+}
+
+impl TrackerStatus {
+    /// All statuses in the order of their probabilities in [`FrameRecord::alpha_probs`].
+    pub const ALL: [TrackerStatus; 3] = [Self::Locked, Self::Partial, Self::Lost];
+
+    /// The lower-case name written to files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Locked => "locked",
+            Self::Partial => "partial",
+            Self::Lost => "lost",
+        }
+    }
+
+    /// The status with 0-based index `i` in [`TrackerStatus::ALL`].
+    pub fn from_index(i: usize) -> Option<Self> {
+        Self::ALL.get(i).copied()
+    }
+
+    /// The 0-based index in [`TrackerStatus::ALL`].
+    pub fn index(self) -> usize {
+        match self {
+            Self::Locked => 0,
+            Self::Partial => 1,
+            Self::Lost => 2,
+        }
+    }
+}
+
+/// What the tracker believed at one frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameRecord {
+    /// 0-based frame index (files show it 1-based, as image and ground-truth numbering do).
+    pub frame: usize,
+    /// The estimated contour as an ellipse.
+    pub ellipse: Ellipse,
+    /// Its axis-aligned bounding box (the tracker's box, MODELS.md).
+    pub bbox: Box2,
+    /// Effective sample size of the weights before resampling.
+    pub ess: f64,
+    /// Estimated clutter class β̂ (0-based index into `beta_probs`), for switching trackers.
+    pub beta_hat: Option<usize>,
+    /// Posterior probability of each clutter class (empty when there is no β).
+    pub beta_probs: Vec<f64>,
+    /// Estimated clutter density λ̂ per pixel.
+    pub lambda_hat: Option<f64>,
+    /// Estimated occlusion γ̂ = E\[γ\] (W Eq. 14).
+    pub gamma_hat: Option<f64>,
+    /// Estimated tracker status α̂.
+    pub alpha_hat: Option<TrackerStatus>,
+    /// Posterior probability of locked, partial, lost (empty when there is no α).
+    pub alpha_probs: Vec<f64>,
+    /// Time spent on this frame, milliseconds.
+    pub millis: f64,
+}
+
+impl FrameRecord {
+    /// A record with the contour, ESS and time only; the switching estimates are absent. The box
+    /// is the ellipse's bounding box.
+    pub fn new(frame: usize, ellipse: Ellipse, ess: f64, millis: f64) -> Self {
+        Self {
+            frame,
+            ellipse,
+            bbox: ellipse.bounding_box(),
+            ess,
+            beta_hat: None,
+            beta_probs: Vec::new(),
+            lambda_hat: None,
+            gamma_hat: None,
+            alpha_hat: None,
+            alpha_probs: Vec::new(),
+            millis,
+        }
+    }
+}
+
+/// Formats `v` for a file, or fails naming the frame and column when it is NaN or infinite.
+fn num(out: &mut String, v: f64, frame: usize, column: &str) -> Result<()> {
+    if !v.is_finite() {
+        return Err(AppError::computation(
+            "track.csv",
+            format!(
+                "frame {}: {column} is {v}; refusing to write a non-finite value",
+                frame + 1
+            ),
+        ));
+    }
+    // `{}` prints the shortest text that reads back as the same f64.
+    let _ = write!(out, "{v}");
+    Ok(())
+}
+
+/// The number of β classes across `records`: every record has either none or the same number.
+fn beta_width(records: &[FrameRecord]) -> Result<usize> {
+    let mut width = 0;
+    for r in records {
+        let k = r.beta_probs.len();
+        if k > 0 && width > 0 && k != width {
+            return Err(AppError::computation(
+                "track.csv",
+                format!(
+                    "frame {}: {k} clutter-class probabilities, earlier frames had {width}",
+                    r.frame + 1
+                ),
+            ));
+        }
+        width = width.max(k);
+    }
+    Ok(width)
+}
+
+/// Renders `track.csv`: a header row and one row per record; absent values are empty cells.
+///
+/// Columns: `frame` (1-based), `cx,cy,a,b,angle` (ellipse, angle in radians), `x,y,w,h` (box),
+/// `ess`, `beta_hat` (0-based class), `beta_p0…beta_p{K−1}` (only when some record has β
+/// probabilities), `lambda_hat`, `gamma_hat`, `alpha_hat` (`locked`/`partial`/`lost`),
+/// `alpha_p_locked,alpha_p_partial,alpha_p_lost` (only when some record has them), `millis`.
+///
+/// # Errors
+/// [`AppError::Computation`] naming the frame and column for a NaN or infinite value, a record
+/// whose number of β probabilities differs from the others, or α probabilities that are not 3.
+pub fn csv_string(records: &[FrameRecord]) -> Result<String> {
+    let k = beta_width(records)?;
+    let has_alpha = records.iter().any(|r| !r.alpha_probs.is_empty());
+    let mut out = String::from("frame,cx,cy,a,b,angle,x,y,w,h,ess,beta_hat");
+    for i in 0..k {
+        let _ = write!(out, ",beta_p{i}");
+    }
+    out.push_str(",lambda_hat,gamma_hat,alpha_hat");
+    if has_alpha {
+        out.push_str(",alpha_p_locked,alpha_p_partial,alpha_p_lost");
+    }
+    out.push_str(",millis\n");
+    for r in records {
+        let f = r.frame;
+        let _ = write!(out, "{}", f + 1);
+        let e = &r.ellipse;
+        let b = &r.bbox;
+        for (v, col) in [
+            (e.cx, "cx"),
+            (e.cy, "cy"),
+            (e.a, "a"),
+            (e.b, "b"),
+            (e.angle, "angle"),
+            (b.x, "x"),
+            (b.y, "y"),
+            (b.w, "w"),
+            (b.h, "h"),
+            (r.ess, "ess"),
+        ] {
+            out.push(',');
+            num(&mut out, v, f, col)?;
+        }
+        out.push(',');
+        if let Some(beta) = r.beta_hat {
+            let _ = write!(out, "{beta}");
+        }
+        for i in 0..k {
+            out.push(',');
+            if let Some(&p) = r.beta_probs.get(i) {
+                num(&mut out, p, f, &format!("beta_p{i}"))?;
+            }
+        }
+        for (v, col) in [(r.lambda_hat, "lambda_hat"), (r.gamma_hat, "gamma_hat")] {
+            out.push(',');
+            if let Some(v) = v {
+                num(&mut out, v, f, col)?;
+            }
+        }
+        out.push(',');
+        if let Some(a) = r.alpha_hat {
+            out.push_str(a.name());
+        }
+        if has_alpha {
+            match r.alpha_probs.len() {
+                0 => out.push_str(",,,"),
+                3 => {
+                    for (p, s) in r.alpha_probs.iter().zip(TrackerStatus::ALL) {
+                        out.push(',');
+                        num(&mut out, *p, f, &format!("alpha_p_{}", s.name()))?;
+                    }
+                }
+                n => {
+                    return Err(AppError::computation(
+                        "track.csv",
+                        format!("frame {}: {n} status probabilities, expected 3", f + 1),
+                    ));
+                }
+            }
+        }
+        out.push(',');
+        num(&mut out, r.millis, f, "millis")?;
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+/// Writes `track.csv` (see [`csv_string`]) atomically.
+///
+/// # Errors
+/// As [`csv_string`], and [`AppError::Write`].
+pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<()> {
+    write_atomic(path, csv_string(records)?.as_bytes())
+}
+
+/// Renders `boxes.txt`: `x,y,w,h` of each record's box, one line per frame, two decimals (the
+/// format OTB-style evaluation toolkits read).
+///
+/// # Errors
+/// [`AppError::Computation`] for a non-finite box, naming the frame.
+pub fn boxes_string(records: &[FrameRecord]) -> Result<String> {
+    let mut out = String::with_capacity(records.len() * 32);
+    for r in records {
+        let b = &r.bbox;
+        if !b.is_finite() {
+            return Err(AppError::computation(
+                "boxes.txt",
+                format!("frame {}: the box is not finite", r.frame + 1),
+            ));
+        }
+        let _ = writeln!(out, "{:.2},{:.2},{:.2},{:.2}", b.x, b.y, b.w, b.h);
+    }
+    Ok(out)
+}
+
+/// Writes `boxes.txt` (see [`boxes_string`]) atomically.
+///
+/// # Errors
+/// As [`boxes_string`], and [`AppError::Write`].
+pub fn write_boxes(path: &Path, records: &[FrameRecord]) -> Result<()> {
+    write_atomic(path, boxes_string(records)?.as_bytes())
+}
+
+/// What `summary.json` holds: the run's settings, its size and speed, and its scores when the
+/// sequence had ground truth.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// Version of the `track` tool.
+    pub tool_version: String,
+    /// Sequence name.
+    pub sequence: String,
+    /// Tracker preset.
+    pub tracker: String,
+    /// Number of particles.
+    pub particles: usize,
+    /// Random seed.
+    pub seed: u64,
+    /// Frames tracked.
+    pub frames: usize,
+    /// Frame width, pixels.
+    pub width: usize,
+    /// Frame height, pixels.
+    pub height: usize,
+    /// The box that initialised the tracker.
+    pub initial_box: Option<Box2>,
+    /// Total tracking time, seconds.
+    pub seconds: f64,
+    /// Frames per second.
+    pub fps: f64,
+    /// Mean time per frame, milliseconds.
+    pub mean_millis: f64,
+    /// Number of frames in each tracker status (locked, partial, lost), when the tracker has α.
+    pub status_counts: Option<[usize; 3]>,
+    /// Scores against the ground truth, when there is one.
+    pub metrics: Option<SequenceMetrics>,
+    /// The files written, relative to the output folder.
+    pub outputs: Vec<String>,
+}
+
+impl Summary {
+    /// Checks that no number in the summary is NaN or infinite (JSON has no NaN; serde_json would
+    /// silently write `null`).
+    ///
+    /// # Errors
+    /// [`AppError::Computation`] naming the field.
+    pub fn validate(&self) -> Result<()> {
+        let mut fields = vec![
+            ("seconds", self.seconds),
+            ("fps", self.fps),
+            ("mean_millis", self.mean_millis),
+        ];
+        if let Some(b) = &self.initial_box {
+            fields.extend([("initial_box.x", b.x), ("initial_box.y", b.y)]);
+            fields.extend([("initial_box.w", b.w), ("initial_box.h", b.h)]);
+        }
+        if let Some(m) = &self.metrics {
+            fields.extend([
+                ("metrics.precision_20", m.precision_20),
+                ("metrics.success_auc", m.success_auc),
+                ("metrics.mean_iou", m.mean_iou),
+                ("metrics.mean_centre_error", m.mean_centre_error),
+                ("metrics.fps", m.fps.unwrap_or(0.0)),
+            ]);
+            fields.extend(
+                m.success_curve
+                    .iter()
+                    .map(|&v| ("metrics.success_curve", v)),
+            );
+        }
+        match fields.iter().find(|(_, v)| !v.is_finite()) {
+            Some((name, v)) => Err(AppError::computation(
+                "summary.json",
+                format!("{name} is {v}; refusing to write a non-finite value"),
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Writes `summary.json` (pretty-printed) atomically.
+///
+/// # Errors
+/// [`Summary::validate`], serialisation failure, and [`AppError::Write`].
+pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
+    summary.validate()?;
+    let text = serde_json::to_string_pretty(summary)
+        .map_err(|e| AppError::computation("summary.json", e))?;
+    write_atomic(path, format!("{text}\n").as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plain(frame: usize) -> FrameRecord {
+        FrameRecord::new(frame, Ellipse::new(10.0, 20.0, 4.0, 2.0, 0.0), 150.5, 1.25)
+    }
+
+    #[test]
+    fn csv_without_switching_columns() {
+        let csv = csv_string(&[plain(0), plain(1)]).unwrap();
+        let expected = "frame,cx,cy,a,b,angle,x,y,w,h,ess,beta_hat,lambda_hat,gamma_hat,alpha_hat,millis\n\
+                        1,10,20,4,2,0,6,18,8,4,150.5,,,,,1.25\n\
+                        2,10,20,4,2,0,6,18,8,4,150.5,,,,,1.25\n";
+        assert_eq!(csv, expected);
+    }
+
+    #[test]
+    fn csv_with_switching_columns_and_absent_values() {
+        let mut full = plain(0);
+        full.beta_hat = Some(2);
+        full.beta_probs = vec![0.1, 0.2, 0.7];
+        full.lambda_hat = Some(0.0824);
+        full.gamma_hat = Some(0.05);
+        full.alpha_hat = Some(TrackerStatus::Partial);
+        full.alpha_probs = vec![0.25, 0.5, 0.25];
+        let csv = csv_string(&[full, plain(1)]).unwrap();
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(
+            lines[0],
+            "frame,cx,cy,a,b,angle,x,y,w,h,ess,beta_hat,beta_p0,beta_p1,beta_p2,lambda_hat,gamma_hat,\
+             alpha_hat,alpha_p_locked,alpha_p_partial,alpha_p_lost,millis"
+        );
+        assert_eq!(
+            lines[1],
+            "1,10,20,4,2,0,6,18,8,4,150.5,2,0.1,0.2,0.7,0.0824,0.05,partial,0.25,0.5,0.25,1.25"
+        );
+        assert_eq!(lines[2], "2,10,20,4,2,0,6,18,8,4,150.5,,,,,,,,,,,1.25");
+        // Every row has as many cells as the header.
+        let cells = |l: &str| l.split(',').count();
+        assert!(lines.iter().all(|l| cells(l) == cells(lines[0])));
+    }
+
+    #[test]
+    fn nan_is_an_error_not_a_cell() {
+        let mut r = plain(4);
+        r.ess = f64::NAN;
+        let msg = csv_string(&[plain(0), r.clone()]).unwrap_err().to_string();
+        assert!(
+            msg.contains("frame 5") && msg.contains("ess is NaN"),
+            "{msg}"
+        );
+        let mut r = plain(0);
+        r.gamma_hat = Some(f64::INFINITY);
+        assert!(
+            csv_string(&[r])
+                .unwrap_err()
+                .to_string()
+                .contains("gamma_hat is inf")
+        );
+        let mut r = plain(0);
+        r.bbox.w = f64::NAN;
+        assert!(boxes_string(&[r]).is_err());
+        let mut a = plain(0);
+        a.beta_probs = vec![0.5, 0.5];
+        let mut b = plain(1);
+        b.beta_probs = vec![1.0];
+        assert!(csv_string(&[a, b]).is_err());
+        let mut a = plain(0);
+        a.alpha_probs = vec![1.0];
+        assert!(csv_string(&[a]).is_err());
+    }
+
+    #[test]
+    fn files_are_written_with_expected_contents() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut r = plain(0);
+        r.ellipse = Ellipse::new(180.0, 109.5, 52.0, 63.5, 0.0);
+        r.bbox = r.ellipse.bounding_box();
+        let records = [r, plain(1)];
+        write_csv(&dir.path().join("track.csv"), &records).unwrap();
+        write_boxes(&dir.path().join("boxes.txt"), &records).unwrap();
+        let boxes = std::fs::read_to_string(dir.path().join("boxes.txt")).unwrap();
+        assert_eq!(boxes, "128.00,46.00,104.00,127.00\n6.00,18.00,8.00,4.00\n");
+        let csv = std::fs::read_to_string(dir.path().join("track.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 3);
+        // A failing write leaves no file behind.
+        let mut bad = plain(2);
+        bad.millis = f64::NAN;
+        assert!(write_csv(&dir.path().join("bad.csv"), &[bad]).is_err());
+        assert!(!dir.path().join("bad.csv").exists());
+    }
+
+    #[test]
+    fn summary_round_trips_and_rejects_nan() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("summary.json");
+        let s = Summary {
+            tool_version: "0.1.0".into(),
+            sequence: "girl_mil".into(),
+            tracker: "full".into(),
+            particles: 200,
+            seed: 7,
+            frames: 502,
+            seconds: 10.0,
+            fps: 50.2,
+            mean_millis: 19.9,
+            initial_box: Some(Box2::new(128.0, 46.0, 104.0, 127.0)),
+            status_counts: Some([500, 2, 0]),
+            outputs: vec!["track.csv".into()],
+            ..Default::default()
+        };
+        write_summary(&path, &s).unwrap();
+        let back: Summary = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        assert_eq!(back, s);
+        let bad = Summary { fps: f64::NAN, ..s };
+        assert!(
+            write_summary(&dir.path().join("s2.json"), &bad)
+                .unwrap_err()
+                .to_string()
+                .contains("fps is NaN")
+        );
+        assert!(!dir.path().join("s2.json").exists());
+    }
+}

@@ -1,0 +1,254 @@
+//! One self-contained HTML page per run: a title, a table of metrics, the SVG plots inlined, and a
+//! strip of overlay frames inlined as base64 PNG. It needs no other file and no network, so it can
+//! be mailed or attached as it is.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use base64::Engine as _;
+use image::RgbImage;
+
+use crate::Result;
+use crate::output::write_atomic;
+use crate::plots::Figure;
+use crate::record::Summary;
+use crate::render::{encode_png, thumbnail};
+
+/// Width of the frames in the strip, pixels (larger frames are scaled down).
+pub const STRIP_WIDTH: u32 = 200;
+
+/// What goes into a report.
+#[derive(Debug, Clone, Default)]
+pub struct ReportInput {
+    /// Page title.
+    pub title: String,
+    /// A sentence under the title (for example the command that produced it).
+    pub subtitle: String,
+    /// Rows of the metrics table: name, value.
+    pub metrics: Vec<(String, String)>,
+    /// Plots, inlined as SVG.
+    pub figures: Vec<Figure>,
+    /// Overlay frames with their captions, inlined as PNG (scaled to [`STRIP_WIDTH`]).
+    pub strip: Vec<(String, RgbImage)>,
+}
+
+/// Escapes text for HTML element content and attribute values.
+pub fn escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for ch in text.chars() {
+        match ch {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// `count` frame indices spread evenly over `frames` frames, first and last included (all of them
+/// when there are fewer frames than `count`).
+pub fn strip_indices(frames: usize, count: usize) -> Vec<usize> {
+    if frames == 0 || count == 0 {
+        return Vec::new();
+    }
+    if count >= frames {
+        return (0..frames).collect();
+    }
+    if count == 1 {
+        return vec![0];
+    }
+    let mut v: Vec<usize> = (0..count)
+        .map(|i| (i * (frames - 1) + (count - 1) / 2) / (count - 1))
+        .collect();
+    v.dedup();
+    v
+}
+
+/// The metrics-table rows of a run summary: sequence, tracker, particles, seed, frames, size,
+/// speed, and the scores when there is ground truth.
+pub fn summary_rows(s: &Summary) -> Vec<(String, String)> {
+    let mut rows = vec![
+        ("sequence".to_string(), s.sequence.clone()),
+        ("tracker".to_string(), s.tracker.clone()),
+        ("particles".to_string(), s.particles.to_string()),
+        ("seed".to_string(), s.seed.to_string()),
+        ("frames".to_string(), s.frames.to_string()),
+        (
+            "frame size".to_string(),
+            format!("{}×{}", s.width, s.height),
+        ),
+        ("frames/s".to_string(), format!("{:.1}", s.fps)),
+        ("ms/frame".to_string(), format!("{:.2}", s.mean_millis)),
+    ];
+    if let Some([l, p, o]) = s.status_counts {
+        rows.push((
+            "frames locked / partial / lost".into(),
+            format!("{l} / {p} / {o}"),
+        ));
+    }
+    if let Some(m) = &s.metrics {
+        rows.push(("labelled frames".into(), m.labelled_frames.to_string()));
+        rows.push((
+            "precision at 20 px".into(),
+            format!("{:.3}", m.precision_20),
+        ));
+        rows.push(("success AUC".into(), format!("{:.3}", m.success_auc)));
+        rows.push(("mean IoU".into(), format!("{:.3}", m.mean_iou)));
+        rows.push((
+            "mean centre error (px)".into(),
+            format!("{:.1}", m.mean_centre_error),
+        ));
+        let failed = m
+            .failed_at_frame
+            .map_or_else(|| "never".to_string(), |f| format!("frame {}", f + 1));
+        rows.push((
+            "trial failed (IoU < 0.2 for 5 labelled frames)".into(),
+            failed,
+        ));
+    }
+    rows
+}
+
+const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1500px;margin:2em auto;\
+padding:0 1em;color:#222}table{border-collapse:collapse}td,th{border:1px solid #ccc;\
+padding:4px 10px;text-align:left}td.v{text-align:right;font-variant-numeric:tabular-nums}\
+.strip{display:flex;flex-wrap:wrap;gap:8px}figure{margin:0}figcaption{font-size:.85em;\
+color:#555}.plot svg{max-width:100%;height:auto}";
+
+/// Renders the page.
+///
+/// # Errors
+/// [`crate::AppError::Computation`] when a strip frame cannot be encoded.
+pub fn render_html(input: &ReportInput) -> Result<String> {
+    let mut h = String::new();
+    let title = escape(&input.title);
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{title}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{title}</h1>\n"
+    );
+    if !input.subtitle.is_empty() {
+        let _ = writeln!(h, "<p>{}</p>", escape(&input.subtitle));
+    }
+    if !input.metrics.is_empty() {
+        h.push_str("<h2>Metrics</h2>\n<table>\n");
+        for (k, v) in &input.metrics {
+            let _ = writeln!(
+                h,
+                "<tr><th>{}</th><td class=\"v\">{}</td></tr>",
+                escape(k),
+                escape(v)
+            );
+        }
+        h.push_str("</table>\n");
+    }
+    if !input.strip.is_empty() {
+        h.push_str("<h2>Frames</h2>\n<div class=\"strip\">\n");
+        let b64 = base64::engine::general_purpose::STANDARD;
+        for (caption, img) in &input.strip {
+            let png = encode_png(&thumbnail(img, STRIP_WIDTH))?;
+            let cap = escape(caption);
+            let _ = writeln!(
+                h,
+                "<figure><img alt=\"{cap}\" src=\"data:image/png;base64,{}\"><figcaption>{cap}</figcaption></figure>",
+                b64.encode(png)
+            );
+        }
+        h.push_str("</div>\n");
+    }
+    if !input.figures.is_empty() {
+        h.push_str("<h2>Plots</h2>\n");
+        for f in &input.figures {
+            // plotters' SVG has no XML declaration, so it can be inlined as it is.
+            let _ = writeln!(
+                h,
+                "<h3>{}</h3>\n<div class=\"plot\">{}</div>",
+                escape(&f.title),
+                f.svg
+            );
+        }
+    }
+    h.push_str("</body>\n</html>\n");
+    Ok(h)
+}
+
+/// Renders the page and writes it atomically.
+///
+/// # Errors
+/// As [`render_html`], and [`crate::AppError::Write`].
+pub fn write_report(path: &Path, input: &ReportInput) -> Result<()> {
+    write_atomic(path, render_html(input)?.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::groundtruth::{Box2, Ellipse};
+    use crate::metrics::evaluate;
+    use crate::plots::all_figures;
+    use crate::record::FrameRecord;
+
+    #[test]
+    fn strip_indices_are_even_and_include_both_ends() {
+        assert_eq!(strip_indices(101, 5), vec![0, 25, 50, 75, 100]);
+        assert_eq!(strip_indices(3, 8), vec![0, 1, 2]);
+        assert_eq!(strip_indices(10, 1), vec![0]);
+        assert!(strip_indices(0, 4).is_empty());
+        let v = strip_indices(502, 6);
+        assert_eq!((v[0], v[5], v.len()), (0, 501, 6));
+    }
+
+    #[test]
+    fn escaping() {
+        assert_eq!(escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&#39;");
+    }
+
+    #[test]
+    fn page_is_self_contained_with_plots_metrics_and_frames() {
+        let records: Vec<FrameRecord> = (0..10)
+            .map(|i| FrameRecord::new(i, Ellipse::new(20.0, 20.0, 5.0, 5.0, 0.0), 50.0, 1.0))
+            .collect();
+        let gt = Box2::new(15.0, 15.0, 10.0, 10.0);
+        let boxes: Vec<Box2> = records.iter().map(|r| r.bbox).collect();
+        let summary = Summary {
+            sequence: "<synthetic>".into(),
+            tracker: "full".into(),
+            frames: 10,
+            fps: 100.0,
+            metrics: Some(evaluate(&boxes, &[Some(gt); 10], Some(0.1)).unwrap()),
+            ..Default::default()
+        };
+        let input = ReportInput {
+            title: "track demo".into(),
+            subtitle: "cargo run -p track-app -- demo".into(),
+            metrics: summary_rows(&summary),
+            figures: all_figures(&records).unwrap(),
+            strip: vec![
+                ("frame 1".into(), RgbImage::new(400, 300)),
+                ("frame 10".into(), RgbImage::new(40, 30)),
+            ],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("report.html");
+        write_report(&path, &input).unwrap();
+        let html = std::fs::read_to_string(&path).unwrap();
+        assert!(html.starts_with("<!DOCTYPE html>"));
+        assert!(html.contains("&lt;synthetic&gt;"));
+        assert!(html.contains("<th>precision at 20 px</th><td class=\"v\">1.000</td>"));
+        assert!(html.contains("<th>success AUC</th><td class=\"v\">0.952</td>"));
+        assert_eq!(html.matches("data:image/png;base64,").count(), 2);
+        assert_eq!(html.matches("<svg").count(), 1);
+        // Nothing is fetched from elsewhere.
+        assert!(!html.contains("src=\"http") && !html.contains("href="));
+        // The inlined image decodes, scaled to the strip width.
+        let start = html.find("base64,").unwrap() + 7;
+        let end = start + html[start..].find('"').unwrap();
+        let png = base64::engine::general_purpose::STANDARD
+            .decode(&html[start..end])
+            .unwrap();
+        let img = image::load_from_memory(&png).unwrap();
+        assert_eq!((img.width(), img.height()), (STRIP_WIDTH, 150));
+    }
+}

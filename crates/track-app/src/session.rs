@@ -1,0 +1,191 @@
+//! Running a tracker over frames: the glue between the `trackers` library and the files.
+//!
+//! A [`Session`] feeds frames to a [`Tracker`], turns each [`Estimate`] into a [`FrameRecord`]
+//! and, when asked, draws the overlay of the frame (contour coloured by tracker status or clutter
+//! class, the likely particles faintly, the ground-truth box).
+
+use contour_obs::Ellipse as ContourEllipse;
+use image::RgbImage;
+use trackers::{Estimate, Tracker};
+
+use crate::groundtruth::{Box2, Ellipse};
+use crate::record::{FrameRecord, TrackerStatus};
+use crate::render::{Overlay, clutter_colour, render_overlay, status_colour};
+use crate::sequence::Frame;
+use crate::{AppError, Result};
+
+/// What colours the estimated contour in overlays.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum ColourBy {
+    /// Tracker status α̂ (locked green, partial orange, lost red), as in Wu Fig. 15.
+    #[default]
+    Status,
+    /// Clutter class β̂ (light blue, medium yellow, heavy magenta), as in Wu Fig. 10.
+    Clutter,
+}
+
+/// How a session draws overlays.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DrawOptions {
+    /// What colours the contour.
+    pub colour_by: ColourBy,
+    /// How many of the heaviest particles to draw faintly.
+    pub particles: usize,
+}
+
+impl Default for DrawOptions {
+    fn default() -> Self {
+        Self {
+            colour_by: ColourBy::Status,
+            particles: 30,
+        }
+    }
+}
+
+/// Tracker status thresholds on γ̂ for trackers that estimate occlusion but not α: the ranges of
+/// Wu §6.3 (locked γ ≤ 0.2, lost γ ≥ 0.8, partially occluded between).
+pub fn status_from_gamma(gamma: f64) -> TrackerStatus {
+    if gamma <= 0.2 {
+        TrackerStatus::Locked
+    } else if gamma < 0.8 {
+        TrackerStatus::Partial
+    } else {
+        TrackerStatus::Lost
+    }
+}
+
+/// The status shown for an estimate: α̂ when the tracker has the status HMM, else from γ̂, else
+/// locked.
+pub fn display_status(e: &Estimate) -> TrackerStatus {
+    if let Some(s) = &e.status {
+        return TrackerStatus::from_index(s.alpha_hat.index()).unwrap_or(TrackerStatus::Locked);
+    }
+    e.gamma.map_or(TrackerStatus::Locked, status_from_gamma)
+}
+
+/// Converts the library's ellipse to the command line's.
+pub fn app_ellipse(e: &ContourEllipse) -> Ellipse {
+    Ellipse::new(e.cx, e.cy, e.a, e.b, e.theta)
+}
+
+/// Converts the command line's ellipse to the library's.
+pub fn library_ellipse(e: &Ellipse) -> ContourEllipse {
+    ContourEllipse {
+        cx: e.cx,
+        cy: e.cy,
+        a: e.a,
+        b: e.b,
+        theta: e.angle,
+    }
+}
+
+/// The record of one estimate (frame index from the caller: the sequence's numbering).
+pub fn record_of(frame: usize, e: &Estimate) -> FrameRecord {
+    let mut r = FrameRecord::new(frame, app_ellipse(&e.ellipse), e.ess, e.millis);
+    r.bbox = Box2::new(e.bbox[0], e.bbox[1], e.bbox[2], e.bbox[3]);
+    if let Some(c) = &e.clutter {
+        r.beta_hat = Some(c.beta_hat);
+        r.beta_probs = c.beta_probs.clone();
+        r.lambda_hat = Some(c.lambda_hat);
+    }
+    r.gamma_hat = e.gamma;
+    if let Some(s) = &e.status {
+        r.alpha_hat = TrackerStatus::from_index(s.alpha_hat.index());
+        r.alpha_probs = s.alpha_probs.to_vec();
+    }
+    r
+}
+
+/// A tracker running over a sequence.
+pub struct Session {
+    tracker: Box<dyn Tracker>,
+    draw: Option<DrawOptions>,
+    records: Vec<FrameRecord>,
+    overlays: Vec<RgbImage>,
+    started: bool,
+}
+
+/// What a session produced.
+#[derive(Debug, Clone, Default)]
+pub struct SessionOutput {
+    /// One record per frame given to the session.
+    pub records: Vec<FrameRecord>,
+    /// One overlay per frame, when drawing was asked for.
+    pub overlays: Vec<RgbImage>,
+    /// Total tracking time (sum of the per-frame times), seconds.
+    pub seconds: f64,
+}
+
+impl Session {
+    /// A session of `tracker`, drawing overlays when `draw` is given.
+    pub fn new(tracker: Box<dyn Tracker>, draw: Option<DrawOptions>) -> Self {
+        Self {
+            tracker,
+            draw,
+            records: Vec::new(),
+            overlays: Vec::new(),
+            started: false,
+        }
+    }
+
+    /// The tracker.
+    pub fn tracker(&self) -> &dyn Tracker {
+        self.tracker.as_ref()
+    }
+
+    /// Feeds one frame: the first initialises the tracker on `init`, the others update it.
+    /// `truth` is the frame's ground-truth box, drawn in the overlay.
+    ///
+    /// # Errors
+    /// [`AppError::Computation`] naming the frame when the tracker fails.
+    pub fn push(&mut self, frame: &Frame, init: &Ellipse, truth: Option<Box2>) -> Result<&FrameRecord> {
+        let view = trackers::Frame::new(frame.gray.width, frame.gray.height, &frame.gray.data)
+            .map_err(|e| AppError::input(&frame.name, e.to_string()))?;
+        let estimate = if self.started {
+            self.tracker.update(view)
+        } else {
+            self.tracker.init(view, library_ellipse(init))
+        }
+        .map_err(|e| AppError::computation(format!("tracking {}", frame.name), e))?;
+        self.started = true;
+        if let Some(draw) = self.draw {
+            self.overlays.push(self.overlay(frame, &estimate, truth, draw));
+        }
+        self.records.push(record_of(frame.index, &estimate));
+        self.records
+            .last()
+            .ok_or_else(|| AppError::computation("tracking", "no record"))
+    }
+
+    fn overlay(&self, frame: &Frame, e: &Estimate, truth: Option<Box2>, draw: DrawOptions) -> RgbImage {
+        let colour = match (draw.colour_by, &e.clutter) {
+            (ColourBy::Clutter, Some(c)) => clutter_colour(c.beta_hat),
+            _ => status_colour(display_status(e)),
+        };
+        let particles = self.tracker.particles(draw.particles);
+        let heaviest = particles.first().map_or(1.0, |p| p.weight).max(1e-300);
+        let mut overlay = Overlay::new(app_ellipse(&e.ellipse), colour);
+        overlay.particles = particles
+            .iter()
+            .map(|p| (app_ellipse(&p.ellipse), 0.6 * (p.weight / heaviest).sqrt()))
+            .collect();
+        overlay.groundtruth = truth;
+        render_overlay(&frame.original.to_rgb(), &overlay)
+    }
+
+    /// Takes the overlay of the last frame pushed (when drawing), so that a long run can write
+    /// overlays as it goes instead of keeping them all.
+    pub fn take_overlay(&mut self) -> Option<RgbImage> {
+        self.overlays.pop()
+    }
+
+    /// Ends the session.
+    pub fn finish(self) -> SessionOutput {
+        let seconds = self.records.iter().map(|r| r.millis).sum::<f64>() / 1e3;
+        SessionOutput {
+            records: self.records,
+            overlays: self.overlays,
+            seconds,
+        }
+    }
+}
