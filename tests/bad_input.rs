@@ -18,7 +18,10 @@ fn run_fails(dir: &Path, seq: &str, extra: &[&str]) -> AppError {
     assert!(!out.exists(), "output was written despite the error: {err}");
     assert_ne!(err.exit_code(), 0);
     let line = err.to_string();
-    assert!(!line.contains('\n') || matches!(err, AppError::InvalidSetting { .. }), "{line}");
+    assert!(
+        !line.contains('\n') || matches!(err, AppError::InvalidSetting { .. }),
+        "{line}"
+    );
     err
 }
 
@@ -47,7 +50,9 @@ fn truncated_image_is_named() {
 fn frames_of_different_sizes_are_rejected() {
     let dir = tempfile::tempdir().unwrap();
     let img = image_folder(dir.path(), 3);
-    image::GrayImage::new(50, 40).save(img.join("0004.png")).unwrap();
+    image::GrayImage::new(50, 40)
+        .save(img.join("0004.png"))
+        .unwrap();
     let err = run_fails(dir.path(), s(&img), &["--init", "14,20,32,32"]);
     assert_eq!(err.exit_code(), 3);
     let msg = err.to_string();
@@ -67,7 +72,11 @@ fn empty_folder_is_rejected() {
 #[test]
 fn missing_sequence_is_rejected() {
     let dir = tempfile::tempdir().unwrap();
-    let err = run_fails(dir.path(), s(&dir.path().join("nope")), &["--init", "1,1,5,5"]);
+    let err = run_fails(
+        dir.path(),
+        s(&dir.path().join("nope")),
+        &["--init", "1,1,5,5"],
+    );
     assert_eq!(err.exit_code(), 3);
     assert!(err.to_string().contains("nope"), "{err}");
 }
@@ -76,12 +85,18 @@ fn missing_sequence_is_rejected() {
 fn malformed_groundtruth_line_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let seq = otb_folder(dir.path(), 4);
-    std::fs::write(seq.join("groundtruth_rect.txt"), "14,20,32,32\n16,20,32\n18,20,32,32\n20,20,32,32\n")
-        .unwrap();
+    std::fs::write(
+        seq.join("groundtruth_rect.txt"),
+        "14,20,32,32\n16,20,32\n18,20,32,32\n20,20,32,32\n",
+    )
+    .unwrap();
     let err = run_fails(dir.path(), s(&seq), &[]);
     assert_eq!(err.exit_code(), 3);
     let msg = err.to_string();
-    assert!(msg.contains("groundtruth_rect.txt") && msg.contains("line 2"), "{msg}");
+    assert!(
+        msg.contains("groundtruth_rect.txt") && msg.contains("line 2"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -99,7 +114,11 @@ fn initial_box_outside_the_frame_or_empty_is_rejected() {
 fn unknown_preset_lists_the_known_ones() {
     let dir = tempfile::tempdir().unwrap();
     let img = image_folder(dir.path(), 3);
-    let err = run_fails(dir.path(), s(&img), &["--init", "14,20,32,32", "--tracker", "m9"]);
+    let err = run_fails(
+        dir.path(),
+        s(&img),
+        &["--init", "14,20,32,32", "--tracker", "m9"],
+    );
     assert_eq!(err.exit_code(), 2);
     let msg = err.to_string();
     assert!(msg.contains("m9") && msg.contains("w-eval"), "{msg}");
@@ -109,13 +128,21 @@ fn unknown_preset_lists_the_known_ones() {
 fn invalid_counts_and_values_are_rejected() {
     let dir = tempfile::tempdir().unwrap();
     let img = image_folder(dir.path(), 3);
-    let err = run_fails(dir.path(), s(&img), &["--init", "14,20,32,32", "--particles", "0"]);
+    let err = run_fails(
+        dir.path(),
+        s(&img),
+        &["--init", "14,20,32,32", "--particles", "0"],
+    );
     assert_eq!(err.exit_code(), 2);
     assert!(err.to_string().contains("particles"), "{err}");
     let err = run_fails(dir.path(), s(&img), &["--init", "14,20,nan,32"]);
     assert_eq!(err.exit_code(), 2);
     assert!(err.to_string().contains("nan"), "{err}");
-    let err = run_fails(dir.path(), s(&img), &["--init", "14,20,32,32", "--particles", "-5"]);
+    let err = run_fails(
+        dir.path(),
+        s(&img),
+        &["--init", "14,20,32,32", "--particles", "-5"],
+    );
     assert_eq!(err.exit_code(), 2);
 }
 
@@ -136,7 +163,11 @@ fn configuration_with_nan_or_a_bad_matrix_is_rejected() {
     let nan = config_with(dir.path(), |t| {
         t["dynamics"]["sigma_translation"] = toml::Value::Float(f64::NAN);
     });
-    let err = run_fails(dir.path(), s(&img), &["--init", "14,20,32,32", "--config", s(&nan)]);
+    let err = run_fails(
+        dir.path(),
+        s(&img),
+        &["--init", "14,20,32,32", "--config", s(&nan)],
+    );
     assert_eq!(err.exit_code(), 2);
     assert!(err.to_string().contains("sigma_translation"), "{err}");
 
@@ -144,14 +175,22 @@ fn configuration_with_nan_or_a_bad_matrix_is_rejected() {
         let row = toml::Value::Array(vec![0.5.into(), 0.4.into(), 0.3.into()]);
         t["clutter"]["switching"]["transition"][0] = row;
     });
-    let err = run_fails(dir.path(), s(&img), &["--init", "14,20,32,32", "--config", s(&bad_rows)]);
+    let err = run_fails(
+        dir.path(),
+        s(&img),
+        &["--init", "14,20,32,32", "--config", s(&bad_rows)],
+    );
     assert_eq!(err.exit_code(), 2);
     let msg = err.to_string();
     assert!(msg.contains("row") && msg.contains("1.2"), "{msg}");
 
     let broken = dir.path().join("broken.json");
     std::fs::write(&broken, "{ not json").unwrap();
-    let err = run_fails(dir.path(), s(&img), &["--init", "14,20,32,32", "--config", s(&broken)]);
+    let err = run_fails(
+        dir.path(),
+        s(&img),
+        &["--init", "14,20,32,32", "--config", s(&broken)],
+    );
     assert_eq!(err.exit_code(), 3);
     assert!(err.to_string().contains("broken.json"), "{err}");
 }
@@ -169,14 +208,22 @@ fn y4m(header: &str, frames: &[&[u8]]) -> Vec<u8> {
 fn y4m_with_unsupported_colour_space_or_truncated_frame_is_rejected() {
     let dir = tempfile::tempdir().unwrap();
     let bad_colour = dir.path().join("c422.y4m");
-    std::fs::write(&bad_colour, y4m("YUV4MPEG2 W8 H8 F25:1 C422", &[&[0u8; 128]])).unwrap();
+    std::fs::write(
+        &bad_colour,
+        y4m("YUV4MPEG2 W8 H8 F25:1 C422", &[&[0u8; 128]]),
+    )
+    .unwrap();
     let err = run_fails(dir.path(), s(&bad_colour), &["--init", "1,1,4,4"]);
     assert_eq!(err.exit_code(), 3);
     assert!(err.to_string().contains("C422"), "{err}");
 
     let truncated = dir.path().join("cut.y4m");
     let full = [0u8; 96];
-    std::fs::write(&truncated, y4m("YUV4MPEG2 W8 H8 F25:1 C420jpeg", &[&full, &full[..40]])).unwrap();
+    std::fs::write(
+        &truncated,
+        y4m("YUV4MPEG2 W8 H8 F25:1 C420jpeg", &[&full, &full[..40]]),
+    )
+    .unwrap();
     let err = run_fails(dir.path(), s(&truncated), &["--init", "1,1,4,4"]);
     assert_eq!(err.exit_code(), 3);
     assert!(err.to_string().contains("cut.y4m"), "{err}");

@@ -10,16 +10,38 @@ fn run_on_an_otb_folder_writes_every_output() {
     let seq = otb_folder(&dir.path().join("seq"), 12);
     let out = dir.path().join("out");
     track(&[
-        "run", s(&seq), "--tracker", "m1", "--particles", "100", "--out", s(&out), "--overlay",
-        "--gif", "--plots", "--report", "--quiet",
+        "run",
+        s(&seq),
+        "--tracker",
+        "m1",
+        "--particles",
+        "100",
+        "--out",
+        s(&out),
+        "--overlay",
+        "--gif",
+        "--plots",
+        "--report",
+        "--quiet",
     ])
     .unwrap();
     let boxes = std::fs::read_to_string(out.join("boxes.txt")).unwrap();
     assert_eq!(boxes.lines().count(), 12);
     let csv = std::fs::read_to_string(out.join("track.csv")).unwrap();
     assert_eq!(csv.lines().count(), 13, "a header and one row per frame");
-    assert!(csv.lines().next().unwrap().starts_with("frame,cx,cy,a,b,angle"));
-    for f in ["track.gif", "report.html", "overlay/0001.png", "overlay/0012.png", "plots/ess.svg"] {
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .starts_with("frame,cx,cy,a,b,angle")
+    );
+    for f in [
+        "track.gif",
+        "report.html",
+        "overlay/0001.png",
+        "overlay/0012.png",
+        "plots/ess.svg",
+    ] {
         assert!(out.join(f).is_file(), "{f} is missing");
     }
     let summary: serde_json::Value =
@@ -43,7 +65,16 @@ fn same_seed_same_boxes_whatever_the_threads() {
     let seq = otb_folder(&dir.path().join("seq"), 8);
     let run = |name: &str, extra: &[&str]| {
         let out = dir.path().join(name);
-        let mut args = vec!["run", s(&seq), "--tracker", "full", "--particles", "60", "--seed", "5"];
+        let mut args = vec![
+            "run",
+            s(&seq),
+            "--tracker",
+            "full",
+            "--particles",
+            "60",
+            "--seed",
+            "5",
+        ];
         args.extend_from_slice(&["--out", s(&out), "--quiet"]);
         args.extend_from_slice(extra);
         track(&args).unwrap();
@@ -56,8 +87,20 @@ fn same_seed_same_boxes_whatever_the_threads() {
     assert_eq!(a, c, "the parallel path must give the sequential result");
     let other_seed = {
         let out = dir.path().join("d");
-        track(&["run", s(&seq), "--tracker", "full", "--particles", "60", "--seed", "6", "--out", s(&out), "--quiet"])
-            .unwrap();
+        track(&[
+            "run",
+            s(&seq),
+            "--tracker",
+            "full",
+            "--particles",
+            "60",
+            "--seed",
+            "6",
+            "--out",
+            s(&out),
+            "--quiet",
+        ])
+        .unwrap();
         std::fs::read_to_string(out.join("boxes.txt")).unwrap()
     };
     assert_ne!(a, other_seed, "the seed must matter");
@@ -67,8 +110,24 @@ fn same_seed_same_boxes_whatever_the_threads() {
 fn demo_writes_a_report() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("demo");
-    track(&["demo", "--tracker", "m1", "--particles", "60", "--out", s(&out), "--quiet"]).unwrap();
-    for f in ["report.html", "track.gif", "track.csv", "summary.json", "plots/ess.svg"] {
+    track(&[
+        "demo",
+        "--tracker",
+        "m1",
+        "--particles",
+        "60",
+        "--out",
+        s(&out),
+        "--quiet",
+    ])
+    .unwrap();
+    for f in [
+        "report.html",
+        "track.gif",
+        "track.csv",
+        "summary.json",
+        "plots/ess.svg",
+    ] {
         assert!(out.join(f).is_file(), "{f} is missing");
     }
 }

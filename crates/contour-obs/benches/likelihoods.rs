@@ -1,5 +1,6 @@
 //! Log-likelihood of 200 hypotheses on a 320×240 frame, with 15 and 40 measurement lines, for
-//! each of the three likelihoods.
+//! each of the three likelihoods (sequential batches), and the rayon batches of Odobez and the
+//! occlusion likelihood.
 
 // criterion_group! generates an undocumented public function.
 #![allow(missing_docs)]
@@ -135,6 +136,30 @@ fn bench(c: &mut Criterion) {
                 b.iter(|| {
                     run(occ.log_likelihood_batch(
                         &mut ws,
+                        black_box(&image),
+                        black_box(&poses),
+                        &lambdas,
+                        &gammas,
+                        &mut out,
+                    ))
+                })
+            },
+        );
+        group.bench_with_input(
+            BenchmarkId::new("odobez_eq19_par", n_lines),
+            &n_lines,
+            |b, _| {
+                b.iter(|| {
+                    run(od.log_likelihood_batch_par(black_box(&image), black_box(&poses), &mut out))
+                })
+            },
+        );
+        group.bench_with_input(
+            BenchmarkId::new("occlusion_eq11_12_par", n_lines),
+            &n_lines,
+            |b, _| {
+                b.iter(|| {
+                    run(occ.log_likelihood_batch_par(
                         black_box(&image),
                         black_box(&poses),
                         &lambdas,

@@ -142,38 +142,80 @@ impl EdgeDetector {
         }
         let (lo, hi) = (lo as usize, hi as usize);
         // Derivatives at lo − 1 ..= hi + 1, stored from index 0.
-        self.deriv.clear();
-        for idx in lo - 1..=hi + 1 {
-            let mut d = 0.0f32;
-            for (j, w) in self.taps.iter().enumerate() {
-                d += w * (profile[idx + j + 1] - profile[idx - j - 1]);
-            }
-            self.deriv.push(d);
-        }
-        let thr = self.settings.threshold;
-        let pol = self.settings.polarity;
-        for i in 1..self.deriv.len() - 1 {
-            let d = self.deriv[i];
-            let keep = match pol {
-                Polarity::Any => true,
-                Polarity::Rising => d > 0.0,
-                Polarity::Falling => d < 0.0,
-            };
-            let (am, a0, ap) = (self.deriv[i - 1].abs(), d.abs(), self.deriv[i + 1].abs());
-            // Non-maximum suppression; the asymmetric comparison keeps one sample of a plateau.
-            if keep && a0 >= thr && a0 >= am && a0 > ap {
-                // Vertex of the parabola through the three |derivative| samples.
-                let den = am - 2.0 * a0 + ap;
-                let delta = if den < 0.0 {
-                    0.5 * (am - ap) / den
-                } else {
-                    0.0
-                };
-                let k = first_offset + (lo + i - 1) as i64;
-                out.push(k as f64 + f64::from(delta.clamp(-0.5, 0.5)));
+        self.fill_derivatives(profile, lo - 1, hi + 1);
+        for (i, d) in self.deriv.windows(3).enumerate() {
+            if let Some(delta) = self.peak(d[0], d[1], d[2]) {
+                let k = first_offset + (lo + i) as i64;
+                out.push(k as f64 + f64::from(delta));
             }
         }
         hi - lo + 1
+    }
+
+    /// The filter responses at `profile[from ..= to]` into the derivative buffer
+    /// ([`Self::responses`]): d_i = Σ_j w_j (s_{i+j} − s_{i−j}). Needs `r ≤ from`, `to + r < profile.len()`.
+    pub(crate) fn fill_derivatives(&mut self, profile: &[f32], from: usize, to: usize) {
+        let r = self.taps.len();
+        let n = to + 1 - from;
+        let s = &profile[from - r..to + r + 1];
+        self.deriv.clear();
+        self.deriv.resize(n, 0.0);
+        let d = &mut self.deriv[..n];
+        // Each response is summed from 0.0 in increasing j, whatever the radius, so every path
+        // gives the same bits. The common radius 3 (σ = 1) is written as one pass over
+        // equal-length slices, which the compiler vectorises without bounds checks.
+        if let [w1, w2, w3] = *self.taps {
+            let (p1, m1) = (&s[4..4 + n], &s[2..2 + n]);
+            let (p2, m2) = (&s[5..5 + n], &s[1..1 + n]);
+            let (p3, m3) = (&s[6..6 + n], &s[..n]);
+            for i in 0..n {
+                let mut v = 0.0f32;
+                v += w1 * (p1[i] - m1[i]);
+                v += w2 * (p2[i] - m2[i]);
+                v += w3 * (p3[i] - m3[i]);
+                d[i] = v;
+            }
+        } else {
+            for (i, di) in d.iter_mut().enumerate() {
+                let mut v = 0.0f32;
+                for (j, w) in self.taps.iter().enumerate() {
+                    v += w * (s[i + r + j + 1] - s[i + r - j - 1]);
+                }
+                *di = v;
+            }
+        }
+    }
+
+    /// The responses of the last [`Self::fill_derivatives`].
+    #[inline]
+    pub(crate) fn responses(&self) -> &[f32] {
+        &self.deriv
+    }
+
+    /// Whether the middle of three consecutive filter responses `dm`, `d`, `dp` is an edge
+    /// (polarity, threshold, non-maximum suppression), and if so its sub-pixel shift in
+    /// [−0.5, 0.5] from the parabola through |dm|, |d|, |dp|.
+    #[inline]
+    pub(crate) fn peak(&self, dm: f32, d: f32, dp: f32) -> Option<f32> {
+        let keep = match self.settings.polarity {
+            Polarity::Any => true,
+            Polarity::Rising => d > 0.0,
+            Polarity::Falling => d < 0.0,
+        };
+        let (am, a0, ap) = (dm.abs(), d.abs(), dp.abs());
+        // Non-maximum suppression; the asymmetric comparison keeps one sample of a plateau.
+        if keep && a0 >= self.settings.threshold && a0 >= am && a0 > ap {
+            // Vertex of the parabola through the three |derivative| samples.
+            let den = am - 2.0 * a0 + ap;
+            let delta = if den < 0.0 {
+                0.5 * (am - ap) / den
+            } else {
+                0.0
+            };
+            Some(delta.clamp(-0.5, 0.5))
+        } else {
+            None
+        }
     }
 }
 

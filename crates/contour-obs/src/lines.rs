@@ -180,19 +180,14 @@ impl MeasurementLines {
             .filter(|_| centre.x.is_finite() && centre.y.is_finite())
             .and_then(|n| inside_interval(image, centre, n, self.reach).map(|iv| (n, iv)));
         if let Some((n, (lo, hi))) = interval {
-            let (cx, cy, nx, ny) = (centre.x as f32, centre.y as f32, n.x as f32, n.y as f32);
-            self.samples.clear();
-            for k in lo..=hi {
-                let kf = k as f32;
-                self.samples
-                    .push(image.sample_inside(cx + kf * nx, cy + kf * ny));
-            }
+            let len = (hi - lo + 1) as usize;
+            self.samples.resize(len, 0.0);
+            image.sample_line((centre.x, centre.y), (n.x, n.y), lo, hi, &mut self.samples);
             let before = self.edges.len();
             examined = self
                 .detector
                 .detect(&self.samples, lo, -half, half, &mut self.edges);
-            let needed = self.settings.min_observed_fraction * (2 * half + 1) as f64;
-            if (examined as f64) < needed || examined == 0 {
+            if !self.enough(examined) {
                 self.edges.truncate(before);
                 examined = 0;
             }
@@ -207,6 +202,75 @@ impl MeasurementLines {
             full
         });
         self.starts.push(self.edges.len());
+    }
+
+    /// Whether `examined` offsets make a line observed.
+    #[inline]
+    fn enough(&self, examined: usize) -> bool {
+        let needed =
+            self.settings.min_observed_fraction * self.settings.length.saturating_add(1) as f64;
+        examined > 0 && examined as f64 >= needed
+    }
+
+    /// The squared offset of the nearest edge to the contour point on the line at `centre`
+    /// along `normal`, considering only edges at integer offsets |k| ≤ `search`; +∞ when there
+    /// is none there or the line is unobserved. The result equals the minimum of z² over the
+    /// edges z with |k| ≤ `search` that [`Self::push_line`] finds (same samples, same
+    /// arithmetic, same observed-line rule), but only the part of the line that can matter is
+    /// sampled: 2·(`search` + 1 + r) + 1 samples instead of L + 3 + 2r. Nothing is stored in the
+    /// line list.
+    pub fn nearest_edge_sq(
+        &mut self,
+        image: &GreyView<'_>,
+        centre: Vector2<f64>,
+        normal: Option<Vector2<f64>>,
+        search: usize,
+    ) -> f64 {
+        let Some(n) = normal.filter(|_| centre.x.is_finite() && centre.y.is_finite()) else {
+            return f64::INFINITY;
+        };
+        let Some((lo, hi)) = inside_interval(image, centre, n, self.reach) else {
+            return f64::INFINITY;
+        };
+        let half = self.settings.half_length() as i64;
+        let r = self.detector.radius() as i64;
+        // The offsets EdgeDetector::detect would examine on the in-image part [lo, hi].
+        let (klo, khi) = ((lo + r + 1).max(-half), (hi - r - 1).min(half));
+        let examined = if khi >= klo {
+            (khi - klo + 1) as usize
+        } else {
+            0
+        };
+        if !self.enough(examined) {
+            return f64::INFINITY;
+        }
+        let search = search.min(half as usize) as i64;
+        let (clo, chi) = (klo.max(-search), khi.min(search));
+        if chi < clo {
+            return f64::INFINITY;
+        }
+        // Samples at clo − 1 − r ..= chi + 1 + r, derivatives at clo − 1 ..= chi + 1.
+        let (s_lo, s_hi) = (clo - 1 - r, chi + 1 + r);
+        let len = (s_hi - s_lo + 1) as usize;
+        self.samples.resize(len, 0.0);
+        image.sample_line(
+            (centre.x, centre.y),
+            (n.x, n.y),
+            s_lo,
+            s_hi,
+            &mut self.samples,
+        );
+        let ru = r as usize;
+        self.detector
+            .fill_derivatives(&self.samples, ru, len - 1 - ru);
+        let mut best = f64::INFINITY;
+        for (i, w) in self.detector.responses().windows(3).enumerate() {
+            if let Some(delta) = self.detector.peak(w[0], w[1], w[2]) {
+                let z = (clo + i as i64) as f64 + f64::from(delta);
+                best = best.min(z * z);
+            }
+        }
+        best
     }
 
     /// Number of lines.
@@ -269,8 +333,18 @@ fn inside_interval(
     n: Vector2<f64>,
     reach: i64,
 ) -> Option<(i64, i64)> {
-    let mut lo = -reach as f64;
-    let mut hi = reach as f64;
+    let r = reach as f64;
+    let (xmax, ymax) = ((image.width() - 1) as f64, (image.height() - 1) as f64);
+    // Most lines lie wholly inside: both end points inside means the whole segment is.
+    let inside = |k: f64| {
+        let (x, y) = (c.x + k * n.x, c.y + k * n.y);
+        (0.0..=xmax).contains(&x) && (0.0..=ymax).contains(&y)
+    };
+    if inside(-r) && inside(r) {
+        return Some((-reach, reach));
+    }
+    let mut lo = -r;
+    let mut hi = r;
     for (ci, ni, max) in [
         (c.x, n.x, (image.width() - 1) as f64),
         (c.y, n.y, (image.height() - 1) as f64),

@@ -4,8 +4,11 @@
 use serde::{Deserialize, Serialize};
 
 use crate::math::{LnFactorial, log_add_exp};
-use crate::odobez::{check_len, ensure_workspace, with_index};
+use crate::odobez::{check_len, ensure_workspace, par_batch, with_index};
 use crate::{Affine2, Contour, Error, GreyView, LineSettings, MeasurementLines, Result, Template};
+
+/// The largest window W in units of σ accepted by [`WuSettings::validate`].
+const MAX_WINDOW_PER_SIGMA: f64 = 50.0;
 
 /// Settings of Wu's likelihood (and of the occlusion mixture built on it).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -42,7 +45,11 @@ impl Default for WuSettings {
 }
 
 impl WuSettings {
-    /// Checks σ > 0, 0 < W ≤ L, p(ψ1) in [0, 1], min λ > 0, and the lines.
+    /// Checks σ > 0, 0 < W ≤ L, W ≤ 50σ, p(ψ1) in [0, 1], min λ > 0, and the lines.
+    ///
+    /// The bound W ≤ 50σ (the default is 4σ) keeps the Gaussian of Eq. 2 anywhere in the window
+    /// above e^{−50²/8} ≈ 1e−136, a normal f64, so the per-line mixture can be formed in the
+    /// linear domain without underflow.
     ///
     /// # Errors
     /// [`Error::InvalidSetting`] naming the field.
@@ -61,6 +68,16 @@ impl WuSettings {
                 format!(
                     "must be in (0, L = {}], got {}",
                     self.lines.length, self.window
+                ),
+            );
+        }
+        if self.window > MAX_WINDOW_PER_SIGMA * self.sigma {
+            return bad(
+                "window",
+                format!(
+                    "must be at most {MAX_WINDOW_PER_SIGMA}σ = {} px, got {}",
+                    MAX_WINDOW_PER_SIGMA * self.sigma,
+                    self.window
                 ),
             );
         }
@@ -90,56 +107,97 @@ pub struct LineTerms {
 }
 
 /// Precomputed constants of the per-line model.
+///
+/// Every piece of a line's likelihood carries the Poisson factor N(m(L); λ) of its clutter count
+/// (Eq. 3–5, 12; for Eq. 5 through N(m − 1) = N(m)·m/μ), so a line's terms are
+/// ln N(m(L); λ) + ln X with a linear-domain mixture X:
+/// - target, Eq. 3–5: X = p(ψ0)G(W/4) + p(ψ1)·(mean of G over the window's edges)·m(L)/μ, or
+///   p(ψ0)G(W/4) + p(ψ1)G(W/2) when the window is empty (a constant);
+/// - clutter only, Eq. 12: X = 1/W;
+/// - occlusion, Eq. 11: X = γ/W + (1 − γ)·X_target.
+///
+/// One `ln` per line with edges in its window, none otherwise, instead of the log-sum-exp of the
+/// log-domain form. [`WuSettings::validate`] bounds W/σ so that every G(z), |z| ≤ W/2, is a
+/// normal f64 and X cannot underflow.
 #[derive(Debug, Clone)]
 struct LineModel {
     half_window: f64,
     inv_two_var: f64,
-    /// ln(σ√(2π)).
-    ln_norm: f64,
-    /// ln p(ψ0) + ln G(W/4).
-    ln_miss: f64,
-    /// ln p(ψ1) + ln G(W/2).
-    ln_detect_empty: f64,
-    ln_p1: f64,
-    ln_window: f64,
+    /// p(ψ0)·G(W/4).
+    miss: f64,
+    /// p(ψ1)/(σ√(2π)): G(z) = e^{−z²/2σ²}/(σ√(2π)).
+    detect_scale: f64,
+    /// X for a line without an edge in its window, and its log.
+    x_empty: f64,
+    ln_x_empty: f64,
+    /// 1/W and ln(1/W).
+    inv_window: f64,
+    ln_inv_window: f64,
     min_lambda: f64,
     ln_fact: LnFactorial,
+}
+
+/// One hypothesis' clutter density, with ln μ cached for full-length lines.
+#[derive(Debug, Clone, Copy)]
+struct Density {
+    lambda: f64,
+    full_length: f64,
+    mu_full: f64,
+    ln_mu_full: f64,
+}
+
+impl Density {
+    fn new(lambda: f64, full_length: f64) -> Self {
+        let mu_full = lambda * full_length;
+        Self {
+            lambda,
+            full_length,
+            mu_full,
+            ln_mu_full: mu_full.ln(),
+        }
+    }
+
+    /// μ = λ·length and ln μ; the same bits whether cached or not.
+    #[inline]
+    fn mu(&self, length: f64) -> (f64, f64) {
+        if length == self.full_length {
+            (self.mu_full, self.ln_mu_full)
+        } else {
+            let mu = self.lambda * length;
+            (mu, mu.ln())
+        }
+    }
 }
 
 impl LineModel {
     fn new(s: &WuSettings) -> Self {
         let inv_two_var = 1.0 / (2.0 * s.sigma * s.sigma);
-        let ln_norm = (s.sigma * (2.0 * std::f64::consts::PI).sqrt()).ln();
-        let ln_g = |z: f64| -z * z * inv_two_var - ln_norm;
-        let ln_p1 = s.p_detect.ln();
-        let ln_p0 = (1.0 - s.p_detect).ln();
+        let norm = s.sigma * (2.0 * std::f64::consts::PI).sqrt();
+        let g = |z: f64| (-z * z * inv_two_var).exp() / norm;
+        let miss = (1.0 - s.p_detect) * g(s.window / 4.0);
+        let x_empty = miss + s.p_detect * g(s.window / 2.0);
+        let inv_window = 1.0 / s.window;
         Self {
             half_window: 0.5 * s.window,
             inv_two_var,
-            ln_norm,
-            ln_miss: ln_p0 + ln_g(s.window / 4.0),
-            ln_detect_empty: ln_p1 + ln_g(s.window / 2.0),
-            ln_p1,
-            ln_window: s.window.ln(),
+            miss,
+            detect_scale: s.p_detect / norm,
+            x_empty,
+            ln_x_empty: x_empty.ln(),
+            inv_window,
+            ln_inv_window: inv_window.ln(),
             min_lambda: s.min_lambda,
             ln_fact: LnFactorial::new(s.lines.length + 2),
         }
     }
 
-    /// log N(m; λ) with mean λ·length (MODELS.md: (λL)^m e^{−λL}/m!).
+    /// ln N(m(L); λ) with mean μ = λ·length (MODELS.md: (λL)^m e^{−λL}/m!), and the target's
+    /// mixture X (see the type docs), `None` for an empty window (X = `x_empty`).
     #[inline]
-    fn ln_poisson(&self, m: usize, lambda: f64, length: f64) -> f64 {
-        let mu = lambda * length;
-        m as f64 * mu.ln() - mu - self.ln_fact.get(m)
-    }
-
-    /// Both pieces for one line; `lambda` already validated and clamped.
-    #[inline]
-    fn terms(&self, edges: &[f64], length: f64, lambda: f64) -> LineTerms {
+    fn split(&self, edges: &[f64], length: f64, density: &Density) -> (f64, Option<f64>) {
         let m_l = edges.len();
-        let ln_n = self.ln_poisson(m_l, lambda, length);
-        // ψ0 (Eq. 3): the target feature is missed; all m(L) features are clutter.
-        let miss = self.ln_miss + ln_n;
+        let (mu, ln_mu) = density.mu(length);
+        let ln_n = m_l as f64 * ln_mu - mu - self.ln_fact.get(m_l);
         let mut m_w = 0usize;
         let mut sum_g = 0.0;
         for z in edges {
@@ -148,19 +206,61 @@ impl LineModel {
                 sum_g += (-z * z * self.inv_two_var).exp();
             }
         }
-        let detect = if m_w == 0 {
-            // Eq. 4.
-            self.ln_detect_empty + ln_n
-        } else {
-            // Eq. 5: the mean Gaussian over the window's features; one feature is the target, so
-            // m(L) − 1 are clutter. Every z in W has G(z) ≥ G(W/2) > 0: no underflow.
-            self.ln_p1 + (sum_g / m_w as f64).ln() - self.ln_norm
-                + self.ln_poisson(m_l - 1, lambda, length)
-        };
-        LineTerms {
-            log_target: log_add_exp(miss, detect),
-            log_clutter: ln_n - self.ln_window,
+        if m_w == 0 {
+            // Eq. 3 + Eq. 4.
+            return (ln_n, None);
         }
+        // Eq. 3 + Eq. 5: the mean Gaussian over the window's features; one feature is the
+        // target, so m(L) − 1 are clutter: N(m − 1) = N(m)·m/μ.
+        let x = self.miss + self.detect_scale * (sum_g / m_w as f64) * (m_l as f64 / mu);
+        (ln_n, Some(x))
+    }
+
+    /// Both pieces for one line; the density already validated and clamped.
+    #[inline]
+    fn terms(&self, edges: &[f64], length: f64, density: &Density) -> LineTerms {
+        let (ln_n, x) = self.split(edges, length, density);
+        LineTerms {
+            log_target: ln_n + x.map_or(self.ln_x_empty, f64::ln),
+            log_clutter: ln_n + self.ln_inv_window,
+        }
+    }
+
+    /// log p(Z_i | x_i, C) for one line.
+    #[inline]
+    fn log_target(&self, edges: &[f64], length: f64, density: &Density) -> f64 {
+        let (ln_n, x) = self.split(edges, length, density);
+        ln_n + x.map_or(self.ln_x_empty, f64::ln)
+    }
+}
+
+/// The occlusion mixture's constants for one γ (Eq. 11).
+#[derive(Debug, Clone, Copy)]
+struct Mixture {
+    /// γ/W.
+    clutter: f64,
+    /// 1 − γ.
+    target: f64,
+    /// ln(γ/W + (1 − γ)·x_empty): a line without an edge in its window.
+    ln_empty: f64,
+}
+
+impl Mixture {
+    fn new(model: &LineModel, gamma: f64) -> Self {
+        let (clutter, target) = (gamma * model.inv_window, 1.0 - gamma);
+        Self {
+            clutter,
+            target,
+            ln_empty: (clutter + target * model.x_empty).ln(),
+        }
+    }
+
+    /// ln(γ p(Z_i|C) + (1 − γ) p(Z_i|x_i, C)) for one line. At γ = 0 and γ = 1 the sum is
+    /// exactly X_target and 1/W, so the value equals `log_target` / `log_clutter` bit for bit.
+    #[inline]
+    fn line_log(&self, model: &LineModel, edges: &[f64], length: f64, density: &Density) -> f64 {
+        let (ln_n, x) = model.split(edges, length, density);
+        ln_n + x.map_or(self.ln_empty, |x| (self.clutter + self.target * x).ln())
     }
 }
 
@@ -184,7 +284,7 @@ pub fn wu_line_terms(
         });
     }
     let lambda = clamp_lambda(lambda, settings.min_lambda, 0)?;
-    Ok(LineModel::new(settings).terms(edges, length, lambda))
+    Ok(LineModel::new(settings).terms(edges, length, &Density::new(lambda, length)))
 }
 
 fn clamp_lambda(lambda: f64, min: f64, index: usize) -> Result<f64> {
@@ -293,10 +393,17 @@ impl WuLikelihood {
         check_len("line terms", self.contour.len(), out.len())?;
         let lambda = clamp_lambda(lambda, self.model.min_lambda, 0)?;
         self.extract(ws, image, pose)?;
+        let density = self.density(lambda);
         for (i, o) in out.iter_mut().enumerate() {
-            *o = self.model.terms(ws.edges(i), ws.observed_length(i), lambda);
+            *o = self
+                .model
+                .terms(ws.edges(i), ws.observed_length(i), &density);
         }
         Ok(())
+    }
+
+    fn density(&self, lambda: f64) -> Density {
+        Density::new(lambda, self.settings.lines.length as f64)
     }
 
     fn extract(
@@ -322,11 +429,11 @@ impl WuLikelihood {
     ) -> Result<f64> {
         let lambda = clamp_lambda(lambda, self.model.min_lambda, 0)?;
         self.extract(ws, image, pose)?;
+        let density = self.density(lambda);
         Ok((0..ws.len())
             .map(|i| {
                 self.model
-                    .terms(ws.edges(i), ws.observed_length(i), lambda)
-                    .log_target
+                    .log_target(ws.edges(i), ws.observed_length(i), &density)
             })
             .sum())
     }
@@ -354,6 +461,32 @@ impl WuLikelihood {
         }
         Ok(())
     }
+
+    /// [`Self::log_likelihood_batch`] on the rayon thread pool, one workspace per task
+    /// (allocated per call); bit-identical results, and the error of the lowest failing index.
+    ///
+    /// # Errors
+    /// As [`Self::log_likelihood_batch`].
+    pub fn log_likelihood_batch_par(
+        &self,
+        image: &GreyView<'_>,
+        poses: &[Affine2],
+        lambdas: &[f64],
+        out: &mut [f64],
+    ) -> Result<()> {
+        check_len("out", poses.len(), out.len())?;
+        param(lambdas, poses.len(), "lambdas")?;
+        par_batch(
+            out,
+            || self.workspace(),
+            |ws, i| self.log_likelihood(ws, image, &poses[i], pick(lambdas, i)),
+        )
+    }
+}
+
+/// The shared value or the one of hypothesis `index` (lengths checked by `param`).
+fn pick(values: &[f64], index: usize) -> f64 {
+    values[if values.len() == 1 { 0 } else { index }]
 }
 
 /// Wu's occlusion likelihood p(Z | X, C, O) = Π_i {γ p(Z_i|C) + (1 − γ) p(Z_i|x_i, C)}
@@ -403,15 +536,11 @@ impl OcclusionLikelihood {
         let gamma = check_gamma(gamma, 0)?;
         let lambda = clamp_lambda(lambda, self.wu.model.min_lambda, 0)?;
         self.wu.extract(ws, image, pose)?;
-        let (ln_g, ln_1g) = (gamma.ln(), (1.0 - gamma).ln());
+        let density = self.wu.density(lambda);
+        let model = &self.wu.model;
+        let mix = Mixture::new(model, gamma);
         Ok((0..ws.len())
-            .map(|i| {
-                let t = self
-                    .wu
-                    .model
-                    .terms(ws.edges(i), ws.observed_length(i), lambda);
-                log_add_exp(ln_g + t.log_clutter, ln_1g + t.log_target)
-            })
+            .map(|i| mix.line_log(model, ws.edges(i), ws.observed_length(i), &density))
             .sum())
     }
 
@@ -434,12 +563,34 @@ impl OcclusionLikelihood {
         param(lambdas, poses.len(), "lambdas")?;
         param(gammas, poses.len(), "gammas")?;
         for (index, (pose, o)) in poses.iter().zip(out.iter_mut()).enumerate() {
-            let pick = |v: &[f64]| v[if v.len() == 1 { 0 } else { index }];
             *o = self
-                .log_likelihood(ws, image, pose, pick(lambdas), pick(gammas))
+                .log_likelihood(ws, image, pose, pick(lambdas, index), pick(gammas, index))
                 .map_err(|e| with_index(e, index))?;
         }
         Ok(())
+    }
+
+    /// [`Self::log_likelihood_batch`] on the rayon thread pool, one workspace per task
+    /// (allocated per call); bit-identical results, and the error of the lowest failing index.
+    ///
+    /// # Errors
+    /// As [`Self::log_likelihood_batch`].
+    pub fn log_likelihood_batch_par(
+        &self,
+        image: &GreyView<'_>,
+        poses: &[Affine2],
+        lambdas: &[f64],
+        gammas: &[f64],
+        out: &mut [f64],
+    ) -> Result<()> {
+        check_len("out", poses.len(), out.len())?;
+        param(lambdas, poses.len(), "lambdas")?;
+        param(gammas, poses.len(), "gammas")?;
+        par_batch(
+            out,
+            || self.workspace(),
+            |ws, i| self.log_likelihood(ws, image, &poses[i], pick(lambdas, i), pick(gammas, i)),
+        )
     }
 }
 
@@ -521,6 +672,12 @@ mod tests {
             },
             WuSettings {
                 p_detect: 1.1,
+                ..Default::default()
+            },
+            // W = 60σ: G(W/2) = e^{−450} would underflow the linear-domain mixture.
+            WuSettings {
+                sigma: 0.1,
+                window: 6.0,
                 ..Default::default()
             },
             WuSettings {

@@ -116,7 +116,11 @@ fn clip_range(lo: f64, hi: f64, n: usize) -> Option<(usize, usize)> {
     // Pixels k with lo <= k <= hi, clipped to 0..n.
     let a = lo.ceil().max(0.0);
     let b = hi.floor().min(n as f64 - 1.0);
-    if a.partial_cmp(&b) != Some(std::cmp::Ordering::Less) && a != b {
+    // Also rejects NaN bounds.
+    if !matches!(
+        a.partial_cmp(&b),
+        Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+    ) {
         return None;
     }
     Some((a as usize, b as usize))

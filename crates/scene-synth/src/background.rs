@@ -215,15 +215,16 @@ impl Background {
         })
     }
 
-    /// The region holding column `x` (clamped into the texture).
-    pub fn region_at(&self, x: f64) -> &Region {
+    /// The region holding column `x` (clamped into the texture); `None` only for a background
+    /// without regions, which [`Background::generate`] never builds.
+    pub fn region_at(&self, x: f64) -> Option<&Region> {
         let n = self.regions.len();
         let i = if x.is_finite() && self.width > 0 {
-            ((x.max(0.0) * n as f64 / self.width as f64).floor() as usize).min(n - 1)
+            (x.max(0.0) * n as f64 / self.width as f64).floor() as usize
         } else {
             0
         };
-        &self.regions[i]
+        self.regions.get(i.min(n.saturating_sub(1)))
     }
 
     /// Borrowed view of the texture.

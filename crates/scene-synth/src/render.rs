@@ -326,7 +326,10 @@ impl Scene {
         let (w, _) = self.size();
         let cam = st.camera;
         let qx = cam.cx + (e.cx - (w as f64 - 1.0) / 2.0) / cam.zoom;
-        let region = self.background.region_at(qx);
+        let (class, density) = self
+            .background
+            .region_at(qx)
+            .map_or((0, 0.0), |r| (r.class.index(), r.measured));
         let v = (visible / e.area()).clamp(0.0, 1.0);
         FrameTruth {
             frame: k,
@@ -334,8 +337,8 @@ impl Scene {
             odobez: e.odobez(),
             affine: e.affine(),
             bbox: e.bounding_box(),
-            clutter_class: region.class.index(),
-            edge_density: region.measured / cam.zoom,
+            clutter_class: class,
+            edge_density: density / cam.zoom,
             visible_fraction: v,
             status: Status::from_visible(v, &self.params.status),
             distractor: st.distractor,

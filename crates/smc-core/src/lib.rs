@@ -9,8 +9,8 @@
 //!   w ∝ w′ · p(z|x) · p(x|x′) / q(x|x′, z): [`Dynamics`] (the prior), [`Proposal`] (q),
 //!   [`Observation`] (the likelihood, with a batch form). [`Bootstrap`] makes any dynamics the
 //!   proposal, giving the bootstrap (CONDENSATION) filter.
-//! - [`resample`]: multinomial (O(N) by sorted uniforms), residual, stratified and systematic
-//!   resampling, returning ancestor indices; the output size may differ from the input size.
+//! - [`resample`]: multinomial (O(N) by sorted uniforms), residual, stratified, systematic and
+//!   SSP resampling, returning ancestor indices; the output size may differ from the input size.
 //! - [`ParticleFilter`]: one step (resample if ESS < threshold·N, propagate, weight, normalise),
 //!   whole or in pieces, with [`StepDiagnostics`] (ESS, resampled, distinct ancestors, largest
 //!   weight, log-evidence increment). The rayon path is bit-identical to the sequential one for
@@ -77,5 +77,6 @@ pub use filter::{FilterSettings, ParticleFilter, ResampleReport, StepDiagnostics
 pub use model::{Bootstrap, Dynamics, FnObservation, Observation, Proposal};
 pub use particles::{Labelled, ParticleSet};
 pub use resample::{
-    Multinomial, Resampler, ResamplingScheme, Residual, Stratified, Systematic, offspring_counts,
+    Multinomial, Resampler, ResamplingScheme, Residual, Ssp, Stratified, Systematic,
+    offspring_counts,
 };

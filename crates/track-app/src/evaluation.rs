@@ -34,8 +34,8 @@ impl SyntheticSequence {
         if let Some(n) = frames {
             params.frames = n;
         }
-        let scene = Scene::new(&params, seed)
-            .map_err(|e| AppError::setting("--frames", e.to_string()))?;
+        let scene =
+            Scene::new(&params, seed).map_err(|e| AppError::setting("--frames", e.to_string()))?;
         let mut out = Self {
             name: scenario.name().to_owned(),
             frames: Vec::with_capacity(scene.len()),
@@ -83,7 +83,8 @@ impl SyntheticSequence {
     /// An invalid configuration or a tracker failure.
     pub fn track(&self, config: TrackerConfig, draw: Option<DrawOptions>) -> Result<SessionOutput> {
         let init = self.initial_ellipse()?;
-        let tracker = trackers::build(config).map_err(|e| AppError::setting("tracker", e.to_string()))?;
+        let tracker =
+            trackers::build(config).map_err(|e| AppError::setting("tracker", e.to_string()))?;
         let mut session = Session::new(tracker, draw);
         for (k, f) in self.frames.iter().enumerate() {
             session.push(f, &init, self.truth_box(k))?;
@@ -117,12 +118,42 @@ pub struct Table1Column {
 /// Odobez Table 1's columns (MODELS.md): D1 (2, 0.01), D2 (3, 0.01), D3 (5, 0.01), D4 (8, 0.02)
 /// with 500 particles; S1, S2 = (5, 0.01) with 250 and 100.
 pub const TABLE1_COLUMNS: [Table1Column; 6] = [
-    Table1Column { name: "D1", sigma_translation: 2.0, sigma_scale: 0.01, particles: 500 },
-    Table1Column { name: "D2", sigma_translation: 3.0, sigma_scale: 0.01, particles: 500 },
-    Table1Column { name: "D3", sigma_translation: 5.0, sigma_scale: 0.01, particles: 500 },
-    Table1Column { name: "D4", sigma_translation: 8.0, sigma_scale: 0.02, particles: 500 },
-    Table1Column { name: "S1", sigma_translation: 5.0, sigma_scale: 0.01, particles: 250 },
-    Table1Column { name: "S2", sigma_translation: 5.0, sigma_scale: 0.01, particles: 100 },
+    Table1Column {
+        name: "D1",
+        sigma_translation: 2.0,
+        sigma_scale: 0.01,
+        particles: 500,
+    },
+    Table1Column {
+        name: "D2",
+        sigma_translation: 3.0,
+        sigma_scale: 0.01,
+        particles: 500,
+    },
+    Table1Column {
+        name: "D3",
+        sigma_translation: 5.0,
+        sigma_scale: 0.01,
+        particles: 500,
+    },
+    Table1Column {
+        name: "D4",
+        sigma_translation: 8.0,
+        sigma_scale: 0.02,
+        particles: 500,
+    },
+    Table1Column {
+        name: "S1",
+        sigma_translation: 5.0,
+        sigma_scale: 0.01,
+        particles: 250,
+    },
+    Table1Column {
+        name: "S2",
+        sigma_translation: 5.0,
+        sigma_scale: 0.01,
+        particles: 100,
+    },
 ];
 
 /// The trackers of Table 1.
@@ -264,13 +295,20 @@ pub struct SwitchingScores {
 
 /// Scores the hidden-process estimates of a run against the scene's truth. Frame 0 (the
 /// initialisation, where nothing is estimated yet) is left out.
-pub fn switching_scores(seq: &SyntheticSequence, tracker: &str, records: &[FrameRecord]) -> SwitchingScores {
+pub fn switching_scores(
+    seq: &SyntheticSequence,
+    tracker: &str,
+    records: &[FrameRecord],
+) -> SwitchingScores {
     let pairs: Vec<(&FrameRecord, &FrameTruth)> = records.iter().zip(&seq.truth).skip(1).collect();
     let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     let beta = mean(
         pairs
             .iter()
-            .filter_map(|(r, t)| r.beta_hat.map(|b| f64::from(u8::from(b + 1 == usize::from(t.clutter_class)))))
+            .filter_map(|(r, t)| {
+                r.beta_hat
+                    .map(|b| f64::from(u8::from(b + 1 == usize::from(t.clutter_class))))
+            })
             .collect(),
     );
     let gamma = mean(
@@ -282,7 +320,10 @@ pub fn switching_scores(seq: &SyntheticSequence, tracker: &str, records: &[Frame
     let alpha = mean(
         pairs
             .iter()
-            .filter_map(|(r, t)| r.alpha_hat.map(|a| f64::from(u8::from(a == truth_status(t)))))
+            .filter_map(|(r, t)| {
+                r.alpha_hat
+                    .map(|a| f64::from(u8::from(a == truth_status(t))))
+            })
             .collect(),
     );
     let ious = seq.ious(records);

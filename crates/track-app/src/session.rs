@@ -138,7 +138,12 @@ impl Session {
     ///
     /// # Errors
     /// [`AppError::Computation`] naming the frame when the tracker fails.
-    pub fn push(&mut self, frame: &Frame, init: &Ellipse, truth: Option<Box2>) -> Result<&FrameRecord> {
+    pub fn push(
+        &mut self,
+        frame: &Frame,
+        init: &Ellipse,
+        truth: Option<Box2>,
+    ) -> Result<&FrameRecord> {
         let view = trackers::Frame::new(frame.gray.width, frame.gray.height, &frame.gray.data)
             .map_err(|e| AppError::input(&frame.name, e.to_string()))?;
         let estimate = if self.started {
@@ -149,7 +154,8 @@ impl Session {
         .map_err(|e| AppError::computation(format!("tracking {}", frame.name), e))?;
         self.started = true;
         if let Some(draw) = self.draw {
-            self.overlays.push(self.overlay(frame, &estimate, truth, draw));
+            self.overlays
+                .push(self.overlay(frame, &estimate, truth, draw));
         }
         self.records.push(record_of(frame.index, &estimate));
         self.records
@@ -157,7 +163,13 @@ impl Session {
             .ok_or_else(|| AppError::computation("tracking", "no record"))
     }
 
-    fn overlay(&self, frame: &Frame, e: &Estimate, truth: Option<Box2>, draw: DrawOptions) -> RgbImage {
+    fn overlay(
+        &self,
+        frame: &Frame,
+        e: &Estimate,
+        truth: Option<Box2>,
+        draw: DrawOptions,
+    ) -> RgbImage {
         let colour = match (draw.colour_by, &e.clutter) {
             (ColourBy::Clutter, Some(c)) => clutter_colour(c.beta_hat),
             _ => status_colour(display_status(e)),

@@ -70,8 +70,14 @@ pub struct DynamicsSettings {
     /// Noise on the shape (Odobez's aspect ratio e, relative; the off-diagonal terms of Wu's A,
     /// relative to the scale). Default 0.01.
     pub sigma_shape: f64,
-    /// ρ, the share of the last velocity carried into the prediction. Default 1 (Eq. 17).
+    /// ρ, the share of the last velocity carried into the prediction of the translation.
+    /// Default 1 (Eq. 17).
     pub velocity_retention: f64,
+    /// ρ for the size and shape components (s, e; the linear part of Wu's A). Default 1 (Eq. 17);
+    /// below 1 the rate of change of size and shape decays, so that the random walk of their
+    /// velocity does not deform the contour over long sequences.
+    #[serde(default = "one")]
+    pub shape_velocity_retention: f64,
     /// Smallest mean radius a state may take, pixels. Default 2.
     pub min_scale: f64,
 }
@@ -84,6 +90,7 @@ impl Default for DynamicsSettings {
             sigma_scale: 0.01,
             sigma_shape: 0.01,
             velocity_retention: 1.0,
+            shape_velocity_retention: 1.0,
             min_scale: 2.0,
         }
     }
@@ -108,11 +115,19 @@ impl DynamicsSettings {
                 });
             }
         }
-        if !(0.0..=1.0).contains(&self.velocity_retention) {
-            return Err(Error::InvalidSetting {
-                name: "dynamics.velocity_retention",
-                reason: format!("{} must be in [0, 1]", self.velocity_retention),
-            });
+        for (name, v) in [
+            ("dynamics.velocity_retention", self.velocity_retention),
+            (
+                "dynamics.shape_velocity_retention",
+                self.shape_velocity_retention,
+            ),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(Error::InvalidSetting {
+                    name,
+                    reason: format!("{v} must be in [0, 1]"),
+                });
+            }
         }
         Ok(())
     }
@@ -140,14 +155,23 @@ impl DynamicsSettings {
         }
     }
 
-    /// The deterministic AR2 prediction x_{k−1} + ρ (x_{k−1} − x_{k−2}).
-    pub fn predict(&self, now: &StateVector, prev: &StateVector) -> StateVector {
+    /// The deterministic AR2 prediction x_{k−1} + ρ (x_{k−1} − x_{k−2}) in `space`.
+    pub fn predict(&self, space: ShapeSpace, now: &StateVector, prev: &StateVector) -> StateVector {
         let mut out = [0.0; STATE_SLOTS];
         for j in 0..STATE_SLOTS {
-            out[j] = now[j] + self.velocity_retention * (now[j] - prev[j]);
+            let rho = if space.is_translation(j) {
+                self.velocity_retention
+            } else {
+                self.shape_velocity_retention
+            };
+            out[j] = now[j] + rho * (now[j] - prev[j]);
         }
         out
     }
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// How the clutter density λ of a particle evolves.
@@ -223,7 +247,9 @@ impl TrackerDynamics {
         previous: &Particle,
         rng: &mut R,
     ) -> StateVector {
-        let mean = self.settings.predict(&previous.now, &previous.prev);
+        let mean = self
+            .settings
+            .predict(self.space, &previous.now, &previous.prev);
         let sigma = self.settings.sigmas(self.space, &previous.now);
         let mut x = mean;
         for j in 0..self.space.dim() {
@@ -235,7 +261,9 @@ impl TrackerDynamics {
 
     /// log p(x_k | x_{k−1}, x_{k−2}) of the kinematic part (Odobez Eq. 17 for Cauchy noise).
     pub fn log_kinematic_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        let mean = self.settings.predict(&previous.now, &previous.prev);
+        let mean = self
+            .settings
+            .predict(self.space, &previous.now, &previous.prev);
         let sigma = self.settings.sigmas(self.space, &previous.now);
         (0..self.space.dim())
             .map(|j| {

@@ -8,7 +8,7 @@ use rand_distr::{Distribution, StandardNormal};
 
 use crate::dynamics::TrackerDynamics;
 use crate::particle::Particle;
-use crate::space::{STATE_SLOTS, ShapeSpace, StateVector};
+use crate::space::{STATE_SLOTS, ShapeSpace, StateVector, axpy};
 
 /// The motion of one cluster, as a Gaussian over the state increment.
 #[derive(Debug, Clone, PartialEq)]
@@ -65,7 +65,7 @@ impl ClusterMotion {
         mean_prev: &StateVector,
     ) -> Self {
         let space = dynamics.space;
-        let pred = dynamics.settings.predict(mean_now, mean_prev);
+        let pred = dynamics.settings.predict(space, mean_now, mean_prev);
         let mut derivative = [0.0; STATE_SLOTS];
         for j in 0..space.dim() {
             derivative[j] = pred[j] - mean_now[j];
@@ -166,9 +166,7 @@ impl MotionProposal<'_> {
     /// The proposal mean α_{k−1} + α̇ for a particle.
     fn mean(&self, previous: &Particle, motion: &ClusterMotion) -> StateVector {
         let mut m = previous.now;
-        for j in 0..self.dynamics.space.dim() {
-            m[j] += motion.derivative[j];
-        }
+        axpy(&mut m, 1.0, &motion.derivative);
         m
     }
 }
@@ -219,9 +217,7 @@ pub fn log_motion_consistency(space: ShapeSpace, clusters: &[ClusterMotion], p: 
     match clusters.get(p.cluster as usize) {
         Some(motion) => {
             let mut mean = p.prev;
-            for j in 0..space.dim() {
-                mean[j] += motion.derivative[j];
-            }
+            axpy(&mut mean, 1.0, &motion.derivative);
             motion.log_density(space, &mean, &p.now)
         }
         None => 0.0,

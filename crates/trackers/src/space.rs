@@ -55,6 +55,14 @@ impl ShapeSpace {
         }
     }
 
+    /// Whether slot `j` is a translation component.
+    pub fn is_translation(self, j: usize) -> bool {
+        match self {
+            ShapeSpace::Odobez => j < 2,
+            ShapeSpace::Affine => j >= 4,
+        }
+    }
+
     /// The centre (translation) of a state.
     pub fn centre(self, x: &StateVector) -> [f64; 2] {
         match self {
@@ -96,6 +104,13 @@ impl ShapeSpace {
                 }
             }
         }
+    }
+}
+
+/// y ← y + a·x over every slot (unused slots of both are zero, so they stay zero).
+pub fn axpy(y: &mut StateVector, a: f64, x: &StateVector) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += a * xi;
     }
 }
 

@@ -19,7 +19,7 @@ use crate::frame::Frame;
 use crate::observation::{FrameObservation, LikelihoodModel};
 use crate::particle::{Particle, default_status};
 use crate::proposal::{ClusterMotion, MotionProposal, state_increment};
-use crate::space::{STATE_SLOTS, StateVector, pose_box};
+use crate::space::{STATE_SLOTS, StateVector, axpy, pose_box};
 use crate::{Error, Result};
 
 /// What a tracker reports for one frame.
@@ -48,6 +48,14 @@ pub struct Estimate {
     pub motion_clusters: (usize, usize),
     /// Wall time of the update, milliseconds.
     pub millis: f64,
+}
+
+/// The point estimates of one step, before they become an [`Estimate`].
+struct PosteriorSummary {
+    state: StateVector,
+    clutter: Option<ClutterEstimate>,
+    gamma: Option<f64>,
+    status: Option<StatusEstimate>,
 }
 
 /// A weighted particle, for drawing.
@@ -191,10 +199,7 @@ impl ParticleTracker {
         // The mean previous state of each cluster, for the fallback prediction.
         let mut prev_means = vec![[0.0; STATE_SLOTS]; k];
         for p in set.states() {
-            let c = p.cluster as usize;
-            for j in 0..STATE_SLOTS {
-                prev_means[c][j] += p.prev[j];
-            }
+            axpy(&mut prev_means[p.cluster as usize], 1.0, &p.prev);
         }
         let spec =
             motion_est::ModelSpec::new(motion_est::MotionModel::Affine, self.config.motion.offset);
@@ -237,15 +242,7 @@ impl ParticleTracker {
         Ok((k, failures))
     }
 
-    fn estimate(
-        &self,
-        set: &ParticleSet<Particle>,
-    ) -> Result<(
-        StateVector,
-        Option<ClutterEstimate>,
-        Option<f64>,
-        Option<StatusEstimate>,
-    )> {
+    fn estimate(&self, set: &ParticleSet<Particle>) -> Result<PosteriorSummary> {
         let weights = set.weights();
         let states = set.states();
         let clutter = match &self.dynamics.clutter {
@@ -282,12 +279,10 @@ impl ParticleTracker {
         for (p, &w) in states.iter().zip(weights) {
             if class.is_none_or(|b| p.clutter.beta == b) {
                 mass += w;
-                for j in 0..STATE_SLOTS {
-                    mean[j] += w * p.now[j];
-                }
+                axpy(&mut mean, w, &p.now);
             }
         }
-        if !(mass > 0.0) {
+        if mass.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::Smc(smc_core::Error::InvalidSetting {
                 name: "weights",
                 reason: "no weight on the estimated class".into(),
@@ -296,7 +291,12 @@ impl ParticleTracker {
         for v in &mut mean {
             *v /= mass;
         }
-        Ok((mean, clutter, gamma, status))
+        Ok(PosteriorSummary {
+            state: mean,
+            clutter,
+            gamma,
+            status,
+        })
     }
 
     fn report(&self, state: StateVector, millis: f64) -> Result<Estimate> {
@@ -451,7 +451,12 @@ impl Tracker for ParticleTracker {
         };
         let estimated = self.estimate(&set);
         self.set = Some(set);
-        let (state, clutter, gamma, status) = estimated?;
+        let PosteriorSummary {
+            state,
+            clutter,
+            gamma,
+            status,
+        } = estimated?;
         self.frame += 1;
         self.previous.clear();
         self.previous.extend_from_slice(frame.data());

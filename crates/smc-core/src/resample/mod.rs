@@ -10,6 +10,7 @@
 //! | [`Residual`] | ⌊L⌋ + a multinomial share of the remainders: at least ⌊L⌋ | O(N + M) |
 //! | [`Stratified`] | between ⌊L⌋ − 1 and ⌈L⌉ + 1 (one uniform per stratum; the two strata at the ends of particle i's interval may or may not land in it) | O(N + M) |
 //! | [`Systematic`] | ⌊L⌋ or ⌈L⌉, always | O(N + M), one uniform |
+//! | [`Ssp`] | ⌊L⌋ or ⌈L⌉, always, negatively associated across particles | O(N + M), one uniform per pair of fractional parts |
 //!
 //! The guarantees hold in exact arithmetic; in floating point the cumulative sums carry a relative
 //! rounding error of order N·ε, which can move a count across an integer only when L is within
@@ -17,11 +18,13 @@
 
 mod multinomial;
 mod residual;
+mod ssp;
 mod stratified;
 mod systematic;
 
 pub use multinomial::Multinomial;
 pub use residual::Residual;
+pub use ssp::Ssp;
 pub use stratified::Stratified;
 pub use systematic::Systematic;
 
@@ -73,18 +76,21 @@ pub enum ResamplingScheme {
     Residual,
     /// [`Stratified`].
     Stratified,
-    /// [`Systematic`], the default: lowest variance of the four and cheapest.
+    /// [`Systematic`], the default: floor/ceil counts and the cheapest scheme.
     #[default]
     Systematic,
+    /// [`Ssp`] (Srinivasan sampling process).
+    Ssp,
 }
 
 impl ResamplingScheme {
     /// All built-in schemes.
-    pub const ALL: [Self; 4] = [
+    pub const ALL: [Self; 5] = [
         Self::Multinomial,
         Self::Residual,
         Self::Stratified,
         Self::Systematic,
+        Self::Ssp,
     ];
 
     /// Lower-case name, as used in settings files.
@@ -95,6 +101,7 @@ impl ResamplingScheme {
             Self::Residual => "residual",
             Self::Stratified => "stratified",
             Self::Systematic => "systematic",
+            Self::Ssp => "ssp",
         }
     }
 }
@@ -118,6 +125,7 @@ impl Resampler for ResamplingScheme {
             Self::Systematic => {
                 Systematic.resample(normalized_weights, output_size, rng, ancestors)
             }
+            Self::Ssp => Ssp.resample(normalized_weights, output_size, rng, ancestors),
         }
     }
 }

@@ -5,7 +5,7 @@ use crate::rng::stream_rng;
 use proptest::prelude::*;
 
 /// Every scheme, as a value.
-const SCHEMES: [ResamplingScheme; 4] = ResamplingScheme::ALL;
+const SCHEMES: [ResamplingScheme; 5] = ResamplingScheme::ALL;
 
 #[test]
 fn bad_inputs_are_typed_errors() {
@@ -63,6 +63,16 @@ fn systematic_grid_is_exact() {
     let mut out = Vec::new();
     Systematic
         .resample_with_offset(&[0.1, 0.4, 0.5], 10, 0.5, &mut out)
+        .unwrap();
+    assert_eq!(out, vec![0, 1, 1, 1, 1, 2, 2, 2, 2, 2]);
+    // Unnormalised weights take the second, rescaled pass and give the same grid.
+    Systematic
+        .resample_with_offset(&[1.0, 4.0, 5.0], 10, 0.5, &mut out)
+        .unwrap();
+    assert_eq!(out, vec![0, 1, 1, 1, 1, 2, 2, 2, 2, 2]);
+    // u = 0 puts the grid at 1, 2, …, 10: particle 0's interval (0, 1] holds one point.
+    Systematic
+        .resample_with_offset(&[0.1, 0.4, 0.5], 10, 0.0, &mut out)
         .unwrap();
     assert_eq!(out, vec![0, 1, 1, 1, 1, 2, 2, 2, 2, 2]);
 }
@@ -152,8 +162,8 @@ proptest! {
         }
     }
 
-    /// The count bounds each scheme guarantees (see the module table): systematic ⌊M w⌋..⌈M w⌉,
-    /// stratified ⌊M w⌋ − 1..⌈M w⌉ + 1, residual at least ⌊M w⌋.
+    /// The count bounds each scheme guarantees (see the module table): systematic and SSP
+    /// ⌊M w⌋..⌈M w⌉, stratified ⌊M w⌋ − 1..⌈M w⌉ + 1, residual at least ⌊M w⌋.
     #[test]
     fn offspring_counts_respect_scheme_bounds(
         w in weights_strategy(300), m in 1usize..1000, seed in any::<u64>())
@@ -163,11 +173,13 @@ proptest! {
         let sys = offspring_counts(&Systematic.resample_vec(&w, m, &mut rng).unwrap(), n);
         let strat = offspring_counts(&Stratified.resample_vec(&w, m, &mut rng).unwrap(), n);
         let res = offspring_counts(&Residual.resample_vec(&w, m, &mut rng).unwrap(), n);
+        let ssp = offspring_counts(&Ssp.resample_vec(&w, m, &mut rng).unwrap(), n);
         for i in 0..n {
             let expected = m as f64 * w[i];
             let lo = (expected - SLACK).floor();
             let hi = (expected + SLACK).ceil();
-            let (s, t, r) = (sys[i] as f64, strat[i] as f64, res[i] as f64);
+            let (s, t, r, p) = (sys[i] as f64, strat[i] as f64, res[i] as f64, ssp[i] as f64);
+            prop_assert!(lo <= p && p <= hi, "ssp: particle {} count {} vs M w = {}", i, p, expected);
             prop_assert!(lo <= s && s <= hi, "systematic: particle {} count {} vs M w = {}", i, s, expected);
             prop_assert!(lo - 1.0 <= t && t <= hi + 1.0, "stratified: particle {} count {} vs M w = {}", i, t, expected);
             prop_assert!(lo <= r, "residual: particle {} count {} vs M w = {}", i, r, expected);
@@ -177,7 +189,7 @@ proptest! {
     /// Unbiasedness: over R = 2000 independent draws the mean count of particle i is M wᵢ.
     /// Its standard error is at most sqrt(max(M wᵢ(1 − wᵢ), 1/4) / R): M wᵢ(1 − wᵢ) is the
     /// multinomial variance (residual and stratified are no larger) and 1/4 bounds the variance
-    /// of any count taking two adjacent values (systematic). The bound allows 6 standard errors
+    /// of any count taking two adjacent values (systematic, SSP). The bound allows 6 standard errors
     /// plus 1e-9, so a false alarm has probability ~1e-9 per comparison.
     #[test]
     fn mean_offspring_count_is_m_w(

@@ -20,8 +20,10 @@ use crate::{AppError, Result};
 
 /// Arguments of `track demo`.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Example:\n  track demo            # writes ./track-demo/report.html and friends\n  \
-    track demo --scenario mclutter --colour-by clutter --out demo-clutter")]
+#[command(
+    after_help = "Example:\n  track demo            # writes ./track-demo/report.html and friends\n  \
+    track demo --scenario mclutter --colour-by clutter --out demo-clutter"
+)]
 pub struct Args {
     /// Output folder.
     #[arg(long, default_value = "track-demo")]
@@ -51,7 +53,8 @@ pub struct Args {
 /// # Errors
 /// See [`AppError`].
 pub fn run(args: &Args) -> Result<()> {
-    let preset = Preset::from_name(&args.tracker).map_err(|e| AppError::setting("--tracker", e.to_string()))?;
+    let preset = Preset::from_name(&args.tracker)
+        .map_err(|e| AppError::setting("--tracker", e.to_string()))?;
     if args.particles == 0 {
         return Err(AppError::setting("--particles", "must be at least 1"));
     }
@@ -72,7 +75,10 @@ pub fn run(args: &Args) -> Result<()> {
     }
     write_gif(&args.out.join("track.gif"), &output.overlays, 80)?;
     write_csv(&args.out.join("track.csv"), records)?;
-    write_atomic(&args.out.join("boxes.txt"), boxes_string(records)?.as_bytes())?;
+    write_atomic(
+        &args.out.join("boxes.txt"),
+        boxes_string(records)?.as_bytes(),
+    )?;
     let truth_boxes: Vec<Option<Box2>> = (0..seq.frames.len()).map(|k| seq.truth_box(k)).collect();
     write_atomic(
         &args.out.join("groundtruth_rect.txt"),
@@ -92,8 +98,15 @@ pub fn run(args: &Args) -> Result<()> {
     let boxes: Vec<Box2> = records.iter().map(|r| r.bbox).collect();
     let metrics = evaluate(&boxes, &truth_boxes, Some(output.seconds.max(1e-9)))?;
     written.extend(
-        ["track.gif", "track.csv", "boxes.txt", "groundtruth_rect.txt", "report.html", "summary.json"]
-            .map(String::from),
+        [
+            "track.gif",
+            "track.csv",
+            "boxes.txt",
+            "groundtruth_rect.txt",
+            "report.html",
+            "summary.json",
+        ]
+        .map(String::from),
     );
     let summary = Summary {
         tool_version: env!("CARGO_PKG_VERSION").to_owned(),
@@ -124,7 +137,10 @@ pub fn run(args: &Args) -> Result<()> {
     write_report(
         &args.out.join("report.html"),
         &ReportInput {
-            title: format!("track demo — {} on the synthetic {} scene", config.name, seq.name),
+            title: format!(
+                "track demo — {} on the synthetic {} scene",
+                config.name, seq.name
+            ),
             subtitle: format!(
                 "track demo --scenario {} --tracker {} --particles {} --seed {}",
                 seq.name, config.name, config.particles, args.seed

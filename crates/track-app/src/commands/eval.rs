@@ -77,7 +77,9 @@ pub enum Evaluation {
     },
     /// Precision at 20 px, success AUC and frames/s on OTB folders (img/ + groundtruth_rect.txt;
     /// frames labelled 0,0,0,0 are not scored).
-    #[command(after_help = "Example:\n  track eval otb ../shared/data/real/girl_mil --tracker m1 --tracker full")]
+    #[command(
+        after_help = "Example:\n  track eval otb ../shared/data/real/girl_mil --tracker m1 --tracker full"
+    )]
     Otb {
         /// OTB folders.
         #[arg(required = true)]
@@ -177,7 +179,10 @@ pub fn run(args: &Args) -> Result<()> {
                 table1_markdown(&rows, &TABLE1_COLUMNS, *trials)
             );
             write_atomic(&out.join("table1.md"), md.as_bytes())?;
-            write_atomic(&out.join("table1.csv"), table1_csv(&rows, &TABLE1_COLUMNS, *trials).as_bytes())?;
+            write_atomic(
+                &out.join("table1.csv"),
+                table1_csv(&rows, &TABLE1_COLUMNS, *trials).as_bytes(),
+            )?;
             println!("{md}");
             Ok(())
         }
@@ -189,7 +194,10 @@ pub fn run(args: &Args) -> Result<()> {
             out,
         } => {
             positive("--particles", *particles)?;
-            let trackers = presets(trackers, &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full])?;
+            let trackers = presets(
+                trackers,
+                &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full],
+            )?;
             let mut rows = Vec::new();
             for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
                 let seq = SyntheticSequence::render(scenario, *frames, 1)?;
@@ -241,18 +249,23 @@ fn sequence_name(dir: &Path) -> String {
 }
 
 /// Tracks one OTB folder from its first labelled box and scores it.
-fn evaluate_otb(dir: &Path, tracker: &str, particles: usize, seed: u64, quiet: bool) -> Result<SequenceMetrics> {
+fn evaluate_otb(
+    dir: &Path,
+    tracker: &str,
+    particles: usize,
+    seed: u64,
+    quiet: bool,
+) -> Result<SequenceMetrics> {
     let spec = dir.to_string_lossy();
     let mut sequence = open_sequence(&spec)?;
-    let gt_path = sequence
-        .groundtruth
-        .clone()
-        .ok_or_else(|| AppError::input(dir, "not an OTB folder: groundtruth_rect.txt is missing"))?;
+    let gt_path = sequence.groundtruth.clone().ok_or_else(|| {
+        AppError::input(dir, "not an OTB folder: groundtruth_rect.txt is missing")
+    })?;
     let info = sequence.source.validate_all()?;
     let truth = load_groundtruth(&gt_path)?;
     check_groundtruth_len(&truth, info.frames, &gt_path)?;
-    let (start, init_box) = first_labelled(&truth)
-        .ok_or_else(|| AppError::input(&gt_path, "no labelled frame"))?;
+    let (start, init_box) =
+        first_labelled(&truth).ok_or_else(|| AppError::input(&gt_path, "no labelled frame"))?;
     init_box.validate_in_frame(info.width, info.height, "the first ground-truth box")?;
     let init = init_box.inscribed_ellipse();
     let config = tracker_config(tracker, None, Some(particles), Some(seed), false)?;
@@ -260,7 +273,11 @@ fn evaluate_otb(dir: &Path, tracker: &str, particles: usize, seed: u64, quiet: b
         trackers::build(config).map_err(|e| AppError::setting("--tracker", e.to_string()))?,
         None,
     );
-    let bar = progress(info.frames as u64, quiet, &format!("{tracker} on {}", sequence.name));
+    let bar = progress(
+        info.frames as u64,
+        quiet,
+        &format!("{tracker} on {}", sequence.name),
+    );
     while let Some(frame) = sequence.source.next_frame()? {
         bar.inc(1);
         if frame.index >= start {
@@ -270,7 +287,11 @@ fn evaluate_otb(dir: &Path, tracker: &str, particles: usize, seed: u64, quiet: b
     bar.finish_and_clear();
     let output = session.finish();
     let boxes: Vec<_> = output.records.iter().map(|r| r.bbox).collect();
-    evaluate(&boxes, &truth[start..start + boxes.len()], Some(output.seconds.max(1e-9)))
+    evaluate(
+        &boxes,
+        &truth[start..start + boxes.len()],
+        Some(output.seconds.max(1e-9)),
+    )
 }
 
 fn otb_markdown(rows: &[(String, String, SequenceMetrics)]) -> String {
@@ -294,7 +315,9 @@ fn otb_markdown(rows: &[(String, String, SequenceMetrics)]) -> String {
 }
 
 fn otb_csv(rows: &[(String, String, SequenceMetrics)]) -> String {
-    let mut s = String::from("sequence,tracker,frames,labelled,precision_20,success_auc,mean_iou,fps,failed_at\n");
+    let mut s = String::from(
+        "sequence,tracker,frames,labelled,precision_20,success_auc,mean_iou,fps,failed_at\n",
+    );
     for (seq, tracker, m) in rows {
         s.push_str(&format!(
             "{seq},{tracker},{},{},{:.4},{:.4},{:.4},{:.2},{}\n",
@@ -304,7 +327,9 @@ fn otb_csv(rows: &[(String, String, SequenceMetrics)]) -> String {
             m.success_auc,
             m.mean_iou,
             m.fps.unwrap_or(0.0),
-            m.failed_at_frame.map(|f| (f + 1).to_string()).unwrap_or_default()
+            m.failed_at_frame
+                .map(|f| (f + 1).to_string())
+                .unwrap_or_default()
         ));
     }
     s

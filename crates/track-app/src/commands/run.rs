@@ -128,7 +128,11 @@ pub fn tracker_config(
     }
     c.filter.parallel |= parallel;
     c.validate().map_err(|e| {
-        let name = if config.is_some() { "--config" } else { "--particles" };
+        let name = if config.is_some() {
+            "--config"
+        } else {
+            "--particles"
+        };
         AppError::setting(name, e.to_string())
     })?;
     Ok(c)
@@ -154,9 +158,9 @@ pub fn progress(len: u64, quiet: bool, what: &str) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new(len);
-    if let Ok(style) = ProgressStyle::with_template(
-        "{msg} [{bar:30}] {pos}/{len} frames, {per_sec}, eta {eta}",
-    ) {
+    if let Ok(style) =
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {per_sec}, eta {eta}")
+    {
         bar.set_style(style.progress_chars("=> "));
     }
     bar.set_message(what.to_owned());
@@ -214,7 +218,8 @@ pub fn run(args: &Args) -> Result<()> {
         ..DrawOptions::default()
     });
     let mut session = Session::new(
-        trackers::build(config.clone()).map_err(|e| AppError::setting("--tracker", e.to_string()))?,
+        trackers::build(config.clone())
+            .map_err(|e| AppError::setting("--tracker", e.to_string()))?,
         draw,
     );
     let gif_every = info.frames.div_ceil(GIF_MAX_FRAMES).max(1);
@@ -222,13 +227,19 @@ pub fn run(args: &Args) -> Result<()> {
     let mut gif_frames = Vec::new();
     let mut strip_frames = Vec::new();
     let mut written = Vec::new();
-    let bar = progress(info.frames as u64, args.quiet, &format!("{} on {}", config.name, sequence.name));
+    let bar = progress(
+        info.frames as u64,
+        args.quiet,
+        &format!("{} on {}", config.name, sequence.name),
+    );
     while let Some(frame) = sequence.source.next_frame()? {
         bar.inc(1);
         if frame.index < start {
             continue;
         }
-        let gt = truth.as_ref().and_then(|t| t.get(frame.index).copied().flatten());
+        let gt = truth
+            .as_ref()
+            .and_then(|t| t.get(frame.index).copied().flatten());
         session.push(&frame, &init, gt)?;
         if let Some(img) = session.take_overlay() {
             let k = frame.index - start;
@@ -256,7 +267,11 @@ pub fn run(args: &Args) -> Result<()> {
     )?;
     written.extend(["track.csv".to_owned(), "boxes.txt".to_owned()]);
     if args.gif {
-        write_gif(&args.out.join("track.gif"), &gif_frames, 1000 / 12 * gif_every as u32)?;
+        write_gif(
+            &args.out.join("track.gif"),
+            &gif_frames,
+            1000 / 12 * gif_every as u32,
+        )?;
         written.push("track.gif".into());
     }
     let figures = if args.plots || args.report {
@@ -329,7 +344,12 @@ fn boxes_with_gap(start: usize, records: &[FrameRecord]) -> String {
 }
 
 /// Scores the tracked frames against the ground truth of the same frames.
-fn score(start: usize, records: &[FrameRecord], truth: &[Option<Box2>], seconds: f64) -> Result<SequenceMetrics> {
+fn score(
+    start: usize,
+    records: &[FrameRecord],
+    truth: &[Option<Box2>],
+    seconds: f64,
+) -> Result<SequenceMetrics> {
     let boxes: Vec<Box2> = records.iter().map(|r| r.bbox).collect();
     let t = &truth[start..start + boxes.len()];
     evaluate(&boxes, t, Some(seconds.max(1e-9)))
