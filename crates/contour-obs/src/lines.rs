@@ -1,6 +1,10 @@
 //! Measurement lines: length L, centred on each contour point along its outward normal, sampled
 //! every pixel by bilinear interpolation, with their detected edges. [`MeasurementLines`] is the
 //! reusable workspace of every likelihood: after the first use it allocates nothing.
+//!
+//! Sample positions c + k·n are stepped in fixed point (`GreyView::sample_line`): within
+//! ~1e−6 px of the exact positions, so edge offsets agree with per-sample f32 interpolation to
+//! well under 1e−4 px (measured worst 5.5e−5 px, `tests/fast_paths.rs`).
 
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
@@ -217,8 +221,8 @@ impl MeasurementLines {
     /// is none there or the line is unobserved. The result equals the minimum of z² over the
     /// edges z with |k| ≤ `search` that [`Self::push_line`] finds (same samples, same
     /// arithmetic, same observed-line rule), but only the part of the line that can matter is
-    /// sampled: 2·(`search` + 1 + r) + 1 samples instead of L + 3 + 2r. Nothing is stored in the
-    /// line list.
+    /// sampled: at most 2·(`search` + 1 + r) + 1 samples instead of L + 3 + 2r. Nothing is
+    /// stored in the line list.
     pub fn nearest_edge_sq(
         &mut self,
         image: &GreyView<'_>,
@@ -249,10 +253,11 @@ impl MeasurementLines {
         if chi < clo {
             return f64::INFINITY;
         }
-        // Samples at clo − 1 − r ..= chi + 1 + r, derivatives at clo − 1 ..= chi + 1.
+        // Samples at clo − 1 − r ..= chi + 1 + r (samples[k − s_lo]), derivatives at
+        // clo − 1 ..= chi + 1, in one run. (Sampling |k| ≤ 2 first and stopping when an edge is
+        // there measured slower on the benchmark: the second run costs more than it saves.)
         let (s_lo, s_hi) = (clo - 1 - r, chi + 1 + r);
-        let len = (s_hi - s_lo + 1) as usize;
-        self.samples.resize(len, 0.0);
+        self.samples.resize((s_hi - s_lo + 1) as usize, 0.0);
         image.sample_line(
             (centre.x, centre.y),
             (n.x, n.y),
@@ -260,13 +265,21 @@ impl MeasurementLines {
             s_hi,
             &mut self.samples,
         );
-        let ru = r as usize;
-        self.detector
-            .fill_derivatives(&self.samples, ru, len - 1 - ru);
+        self.nearest_in(clo, chi, s_lo)
+    }
+
+    /// min z² over the edges at integer offsets `a` ..= `b`, from `samples[k − s_lo]`, which
+    /// must hold offsets a − 1 − r ..= b + 1 + r.
+    fn nearest_in(&mut self, a: i64, b: i64, s_lo: i64) -> f64 {
+        self.detector.fill_derivatives(
+            &self.samples,
+            (a - 1 - s_lo) as usize,
+            (b + 1 - s_lo) as usize,
+        );
         let mut best = f64::INFINITY;
         for (i, w) in self.detector.responses().windows(3).enumerate() {
             if let Some(delta) = self.detector.peak(w[0], w[1], w[2]) {
-                let z = (clo + i as i64) as f64 + f64::from(delta);
+                let z = (a + i as i64) as f64 + f64::from(delta);
                 best = best.min(z * z);
             }
         }

@@ -167,6 +167,38 @@ fn bench(c: &mut Criterion) {
             .unwrap()
         })
     });
+    let est_t = MotionEstimator::new(Settings::tracking()).unwrap();
+    g.bench_function(BenchmarkId::new("affine", "tracking"), |b| {
+        b.iter(|| {
+            est_t
+                .estimate(
+                    &p0,
+                    &p1,
+                    black_box(&ell),
+                    ModelSpec::new(MotionModel::Affine, false),
+                    Some([159.5, 119.5]),
+                    &mut ws,
+                )
+                .unwrap()
+        })
+    });
+    // Warm start from a prediction 0.5 px off the true motion (3, −2) + 3 % zoom.
+    let guess = [2.5, 0.03, 0.0, -1.6, 0.0, 0.03];
+    g.bench_function(BenchmarkId::new("affine", "tracking_warm"), |b| {
+        b.iter(|| {
+            est_t
+                .estimate_from(
+                    &p0,
+                    &p1,
+                    black_box(&ell),
+                    ModelSpec::new(MotionModel::Affine, false),
+                    Some([159.5, 119.5]),
+                    Some(&guess),
+                    &mut ws,
+                )
+                .unwrap()
+        })
+    });
     g.finish();
 }
 

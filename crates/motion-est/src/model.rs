@@ -70,6 +70,18 @@ impl MotionModel {
         }
     }
 
+    /// Rescales geometric parameters from level 0 to level `l` (translations divided by 2^l).
+    pub(crate) fn to_coarser_level(self, p: &mut [f64], l: usize) {
+        let f = 0.5f64.powi(l as i32);
+        let idx: &[usize] = match self {
+            MotionModel::Translation | MotionModel::Scale => &[0, 1],
+            MotionModel::Affine => &[0, 3],
+        };
+        for &i in idx {
+            p[i] *= f;
+        }
+    }
+
     /// Rescales geometric parameters from pyramid level l+1 to level l (translations double,
     /// linear terms are scale-free).
     pub(crate) fn to_finer_level(self, p: &mut [f64]) {

@@ -10,17 +10,27 @@
 mod common;
 
 use common::*;
-use motion_est::{ImageView, ModelSpec, MotionEstimator, MotionModel, Region};
+use motion_est::{ImageView, ModelSpec, MotionEstimator, MotionModel, Region, Settings};
 
 const W: usize = 320;
 const H: usize = 240;
 const DRAWS: u64 = 30;
 
 fn ratio(region: Region<'_>, corners: [f64; 4], origin: [f64; 2], seed: u64) -> f64 {
+    ratio_with(region, corners, origin, seed, Settings::default())
+}
+
+fn ratio_with(
+    region: Region<'_>,
+    corners: [f64; 4],
+    origin: [f64; 2],
+    seed: u64,
+    settings: Settings,
+) -> f64 {
     let tex = Texture::new(seed, 300, 40.0);
     let warp = Affine::issue(origin, [3.0, -2.0]);
     let (c0, c1) = clean_pair(W, H, &tex, &warp, 0.0, None);
-    let est = MotionEstimator::new(Default::default()).unwrap();
+    let est = MotionEstimator::new(settings).unwrap();
     let (mut emp, mut pred) = (0.0, 0.0);
     for d in 0..DRAWS {
         let f0 = noisy(&c0, 2.0, 7000 + 2 * d);
@@ -62,5 +72,25 @@ fn region_64_covariance_is_calibrated() {
         height: 64.0,
     };
     let r = ratio(region, [128.0, 88.0, 191.0, 151.0], [159.5, 119.5], 12);
+    assert!((0.8..=1.25).contains(&r), "{r}");
+}
+
+#[test]
+fn tracking_preset_covariance_is_calibrated() {
+    // The covariance is computed once, at the final estimate, whatever the stopping rule: the
+    // looser tracking tolerance must not break the calibration.
+    let region = Region::Rect {
+        x: 128.0,
+        y: 88.0,
+        width: 64.0,
+        height: 64.0,
+    };
+    let r = ratio_with(
+        region,
+        [128.0, 88.0, 191.0, 151.0],
+        [159.5, 119.5],
+        12,
+        Settings::tracking(),
+    );
     assert!((0.8..=1.25).contains(&r), "{r}");
 }

@@ -5,7 +5,9 @@
 //! SCENE one of mclutter, occlusion, distractor, zoom. Environment variables override settings:
 //! FRAMES, RHO and SRHO (velocity retention of translation and shape), ST, SS, SSH (noise of
 //! translation, scale and shape), LC (λ_c), TOL, IT, LEV, MINPIX (motion estimator), EST (use the
-//! plain weighted mean), WIN and PD (Wu's window and detection probability), V (per-seed lines).
+//! plain weighted mean), WIN and PD (Wu's window and detection probability), OA0 (no
+//! occlusion-aware proposal), WS0 (no warm start), DEFSET (accurate motion settings), V (per-seed
+//! lines).
 
 use contour_obs::Ellipse;
 use scene_synth::{Scenario, ScenarioParams, Scene};
@@ -77,6 +79,9 @@ fn main() {
         if let (Some(v), Some(w)) = (env("PD"), c.likelihood.clutter.as_mut()) {
             w.p_detect = v;
         }
+        if std::env::var("OA0").is_ok() { c.motion.occlusion_aware = false; }
+        if std::env::var("WS0").is_ok() { c.motion.warm_start = false; }
+        if std::env::var("DEFSET").is_ok() { c.motion.estimator = motion_est::Settings::default(); }
         let mut t = build(c).unwrap();
         let mut ious = vec![];
         for (k, (img, truth)) in frames.iter().enumerate() {

@@ -80,6 +80,11 @@ pub struct DynamicsSettings {
     pub shape_velocity_retention: f64,
     /// Smallest mean radius a state may take, pixels. Default 2.
     pub min_scale: f64,
+    /// The range of the mean radius relative to the initial one (default [0.4, 2.5]): scale is
+    /// bounded so that the contour cannot collapse onto, or swell over, a patch of clutter that
+    /// happens to fit (seen when the target slides behind an occluder).
+    #[serde(default = "default_scale_range")]
+    pub scale_range: [f64; 2],
 }
 
 impl Default for DynamicsSettings {
@@ -92,6 +97,7 @@ impl Default for DynamicsSettings {
             velocity_retention: 1.0,
             shape_velocity_retention: 1.0,
             min_scale: 2.0,
+            scale_range: default_scale_range(),
         }
     }
 }
@@ -114,6 +120,13 @@ impl DynamicsSettings {
                     reason: format!("{v} must be finite and positive"),
                 });
             }
+        }
+        let [lo, hi] = self.scale_range;
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= 1.0 && hi >= 1.0) {
+            return Err(Error::InvalidSetting {
+                name: "dynamics.scale_range",
+                reason: format!("[{lo}, {hi}] must satisfy 0 < low ≤ 1 ≤ high"),
+            });
         }
         for (name, v) in [
             ("dynamics.velocity_retention", self.velocity_retention),
@@ -174,6 +187,10 @@ fn one() -> f64 {
     1.0
 }
 
+fn default_scale_range() -> [f64; 2] {
+    [0.4, 2.5]
+}
+
 /// How the clutter density λ of a particle evolves.
 #[derive(Debug, Clone)]
 pub enum ClutterProcess {
@@ -205,6 +222,8 @@ pub struct TrackerDynamics {
     pub clutter: ClutterProcess,
     /// Occlusion process.
     pub occlusion: OcclusionModel,
+    /// Bounds of the mean radius in pixels, set from the initial contour by the tracker.
+    pub scale_bounds: (f64, f64),
 }
 
 impl TrackerDynamics {
@@ -255,7 +274,7 @@ impl TrackerDynamics {
         for j in 0..self.space.dim() {
             x[j] += sigma[j] * self.settings.noise.sample(rng);
         }
-        self.space.clamp(&mut x, self.settings.min_scale);
+        self.space.clamp(&mut x, self.scale_bounds);
         x
     }
 
@@ -309,6 +328,7 @@ mod tests {
             },
             clutter: ClutterProcess::Fixed(0.05),
             occlusion: OcclusionModel::None,
+            scale_bounds: (2.0, 1e4),
         }
     }
 

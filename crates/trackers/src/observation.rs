@@ -49,7 +49,7 @@ impl Default for ImplicitMotionSettings {
 }
 
 /// Which likelihood terms a tracker multiplies.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LikelihoodSettings {
     /// Odobez's shape likelihood (Eq. 19).
@@ -60,6 +60,31 @@ pub struct LikelihoodSettings {
     pub motion_consistency: bool,
     /// Wu's clutter (and occlusion) likelihood (Eq. 1–6, 11–12).
     pub clutter: Option<WuSettings>,
+    /// The share of each measurement line on which background clutter can appear (default 1,
+    /// Wu Eq. 1: the whole line). A line is centred on the contour, so about half of it lies on
+    /// the target, which hides the background behind it: with 1, the particles' λ estimates the
+    /// edge density of the whole line, about half the background density that Wu's λ̄ were learnt
+    /// from (random lines thrown on the background, §6.1), and β̂ reads one class too light. The
+    /// presets use 0.5: the Poisson mean becomes λ · 0.5 · L, so that λ stays a background
+    /// density comparable with λ̄.
+    #[serde(default = "one")]
+    pub clutter_line_fraction: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Default for LikelihoodSettings {
+    fn default() -> Self {
+        Self {
+            shape: None,
+            implicit_motion: None,
+            motion_consistency: false,
+            clutter: None,
+            clutter_line_fraction: 1.0,
+        }
+    }
 }
 
 impl LikelihoodSettings {
@@ -79,6 +104,13 @@ impl LikelihoodSettings {
         }
         if let Some(w) = &self.clutter {
             w.validate()?;
+        }
+        let f = self.clutter_line_fraction;
+        if !(f > 0.0 && f <= 1.0) {
+            return Err(Error::InvalidSetting {
+                name: "likelihood.clutter_line_fraction",
+                reason: format!("{f} must be in (0, 1]"),
+            });
         }
         if let Some(m) = &self.implicit_motion {
             if !(m.lambda_c.is_finite() && m.lambda_c >= 0.0) {
@@ -113,6 +145,7 @@ pub struct LikelihoodModel {
     implicit: Option<(ImplicitMotionSettings, Vec<[f64; 2]>)>,
     motion_consistency: bool,
     clutter: Option<OcclusionLikelihood>,
+    clutter_line_fraction: f64,
 }
 
 impl LikelihoodModel {
@@ -141,6 +174,7 @@ impl LikelihoodModel {
                 .clutter
                 .map(|w| OcclusionLikelihood::new(w, &template))
                 .transpose()?,
+            clutter_line_fraction: settings.clutter_line_fraction,
         })
     }
 
@@ -206,7 +240,8 @@ impl FrameObservation<'_> {
             }
         }
         if let (Some(clutter), Some(ws)) = (&m.clutter, scratch.clutter_lines.as_mut()) {
-            match clutter.log_likelihood(ws, &self.current, &pose, p.clutter.lambda, p.gamma()) {
+            let lambda = m.clutter_line_fraction * p.clutter.lambda;
+            match clutter.log_likelihood(ws, &self.current, &pose, lambda, p.gamma()) {
                 Ok(v) => total += v,
                 Err(_) => return f64::NEG_INFINITY,
             }

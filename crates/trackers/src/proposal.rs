@@ -156,6 +156,12 @@ pub struct MotionProposal<'a> {
     pub dynamics: &'a TrackerDynamics,
     /// One motion per cluster.
     pub clusters: &'a [ClusterMotion],
+    /// Mix the prior into the proposal by the particle's occlusion γ: q = (1 − γ) q_motion +
+    /// γ p(α_k | α_{k−1}). Beyond both papers: the image motion of an occluded target's region is
+    /// the occluder's, so a particle that believes its target hidden coasts on its own dynamics
+    /// instead of following the occluder. With γ = 0 this is Odobez's Eq. 16 exactly; the weight
+    /// uses the mixture density (Eq. 3), so the filter stays correct for any γ.
+    pub occlusion_aware: bool,
 }
 
 impl MotionProposal<'_> {
@@ -171,14 +177,27 @@ impl MotionProposal<'_> {
     }
 }
 
+impl MotionProposal<'_> {
+    /// The weight of the prior in the proposal of a particle: its previous occlusion γ when
+    /// `occlusion_aware`, else 0. See [`MotionProposal::occlusion_aware`].
+    fn prior_share(&self, previous: &Particle) -> f64 {
+        if self.occlusion_aware {
+            previous.status.gamma.clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    }
+}
+
 impl smc_core::Proposal for MotionProposal<'_> {
     type State = Particle;
 
     fn sample<R: Rng + ?Sized>(&self, _index: usize, previous: &Particle, rng: &mut R) -> Particle {
         let mut next = *previous;
         next.prev = previous.now;
+        let use_prior = self.prior_share(previous) > rng.random::<f64>();
         match self.cluster(previous) {
-            Some(motion) => {
+            Some(motion) if !use_prior => {
                 let mean = self.mean(previous, motion);
                 let d = self.dynamics.space.dim();
                 let mut z = Vector6::zeros();
@@ -192,21 +211,32 @@ impl smc_core::Proposal for MotionProposal<'_> {
                 }
                 self.dynamics
                     .space
-                    .clamp(&mut next.now, self.dynamics.settings.min_scale);
+                    .clamp(&mut next.now, self.dynamics.scale_bounds);
             }
-            None => next.now = self.dynamics.sample_kinematics(previous, rng),
+            _ => next.now = self.dynamics.sample_kinematics(previous, rng),
         }
         self.dynamics.sample_hidden(previous, &mut next, rng);
         next
     }
 
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
-        match self.cluster(previous) {
-            Some(motion) => {
-                motion.log_density(self.dynamics.space, &self.mean(previous, motion), &next.now)
-            }
-            None => self.dynamics.log_kinematic_density(previous, next),
+        let Some(motion) = self.cluster(previous) else {
+            return self.dynamics.log_kinematic_density(previous, next);
+        };
+        let log_motion =
+            motion.log_density(self.dynamics.space, &self.mean(previous, motion), &next.now);
+        let share = self.prior_share(previous);
+        if share <= 0.0 {
+            return log_motion;
         }
+        // The mixture (1 − γ) q_motion + γ p_prior, in logs.
+        let a = (1.0 - share).ln() + log_motion;
+        let b = share.ln() + self.dynamics.log_kinematic_density(previous, next);
+        let m = a.max(b);
+        if m == f64::NEG_INFINITY {
+            return m;
+        }
+        m + ((a - m).exp() + (b - m).exp()).ln()
     }
 }
 

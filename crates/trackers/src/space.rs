@@ -79,28 +79,29 @@ impl ShapeSpace {
         }
     }
 
-    /// Keeps a sampled state inside the valid domain: scale at least `min_scale` pixels and,
-    /// for Odobez, the aspect ratio in [1/4, 4]. Heavy-tailed (Cauchy) noise can otherwise
-    /// produce a negative scale, which has no contour.
-    pub fn clamp(self, x: &mut StateVector, min_scale: f64) {
+    /// Keeps a sampled state inside the valid domain: mean radius within `[min, max]` pixels
+    /// and, for Odobez, the aspect ratio in [1/4, 4]. Heavy-tailed (Cauchy) noise can otherwise
+    /// produce a negative scale, which has no contour, and a contour can otherwise shrink onto a
+    /// corner of the image where any likelihood is easy to satisfy.
+    pub fn clamp(self, x: &mut StateVector, (min, max): (f64, f64)) {
         match self {
             ShapeSpace::Odobez => {
-                x[2] = x[2].max(min_scale);
+                x[2] = x[2].clamp(min, max);
                 x[3] = x[3].clamp(0.25, 4.0);
             }
             ShapeSpace::Affine => {
                 let s = self.scale(x);
-                if s < min_scale {
-                    let centre = [x[4], x[5]];
-                    let r = min_scale / s.max(1e-9);
-                    let ok = (x[0] * x[3] - x[1] * x[2]).abs() > 1e-18;
-                    if ok {
-                        for v in &mut x[..4] {
-                            *v *= r;
-                        }
-                    } else {
-                        *x = [min_scale, 0.0, 0.0, min_scale, centre[0], centre[1]];
+                if (min..=max).contains(&s) {
+                    return;
+                }
+                if s > 1e-9 {
+                    let r = s.clamp(min, max) / s;
+                    for v in &mut x[..4] {
+                        *v *= r;
                     }
+                } else {
+                    let centre = [x[4], x[5]];
+                    *x = [min, 0.0, 0.0, min, centre[0], centre[1]];
                 }
             }
         }
@@ -159,7 +160,7 @@ mod tests {
     #[test]
     fn clamp_restores_a_positive_scale() {
         let mut x = [10.0, 10.0, -3.0, 9.0, 0.0, 0.0];
-        ShapeSpace::Odobez.clamp(&mut x, 2.0);
+        ShapeSpace::Odobez.clamp(&mut x, (2.0, 100.0));
         assert_eq!(x[2], 2.0);
         assert_eq!(x[3], 4.0);
     }

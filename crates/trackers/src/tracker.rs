@@ -141,6 +141,7 @@ impl ParticleTracker {
                 settings: config.dynamics,
                 clutter,
                 occlusion,
+                scale_bounds: (config.dynamics.min_scale, f64::INFINITY),
             },
             likelihood: LikelihoodModel::new(config.space, &config.likelihood)?,
             filter: ParticleFilter::new(config.filter.clone())?,
@@ -205,6 +206,7 @@ impl ParticleTracker {
             motion_est::ModelSpec::new(motion_est::MotionModel::Affine, self.config.motion.offset);
         self.clusters.clear();
         let mut failures = 0;
+        let mut warm: Option<Vec<f64>> = None;
         for (c, mean) in self.clustering.means.iter().enumerate() {
             let size = self.clustering.sizes[c].max(1) as f64;
             let mean_prev = prev_means[c].map(|v| v / size);
@@ -220,15 +222,19 @@ impl ParticleTracker {
                 });
                 let est = self
                     .motion
-                    .estimate(
+                    .estimate_from(
                         &self.pyramid_prev,
                         &self.pyramid_now,
                         &region,
                         spec,
                         Some([e.cx, e.cy]),
+                        warm.as_deref(),
                         &mut self.motion_workspace,
                     )
                     .ok()?;
+                if self.config.motion.warm_start && est.converged {
+                    warm = Some(est.params.clone());
+                }
                 let (d, cov) =
                     state_increment(space, mean, &est.affine(), &est.affine_covariance()).ok()?;
                 ClusterMotion::new(space, d, &cov, &sigmas, est.converged)
@@ -357,6 +363,12 @@ impl Tracker for ParticleTracker {
         }
         let space = self.config.space;
         let centre = space.from_ellipse(&ellipse);
+        let s0 = space.scale(&centre);
+        let [lo, hi] = self.config.dynamics.scale_range;
+        self.dynamics.scale_bounds = (
+            (lo * s0).max(self.config.dynamics.min_scale),
+            (hi * s0).max(self.config.dynamics.min_scale),
+        );
         let sigmas = self.dynamics.settings.sigmas(space, &centre);
         let spread = self.config.init_spread;
         let particles: Vec<Particle> = (0..self.config.particles)
@@ -367,7 +379,7 @@ impl Tracker for ParticleTracker {
                     let z: f64 = StandardNormal.sample(&mut rng);
                     x[j] += spread * sigmas[j] * z;
                 }
-                space.clamp(&mut x, self.config.dynamics.min_scale);
+                space.clamp(&mut x, self.dynamics.scale_bounds);
                 let (clutter, status) = self.initial_hidden(i);
                 Particle::at_rest(x, clutter, status)
             })
@@ -431,6 +443,7 @@ impl Tracker for ParticleTracker {
                 let proposal = MotionProposal {
                     dynamics: &self.dynamics,
                     clusters: &self.clusters,
+                    occlusion_aware: self.config.motion.occlusion_aware,
                 };
                 self.filter.propagate(&mut set, &proposal, seed, step);
                 self.filter.weight(
