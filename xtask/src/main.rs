@@ -63,22 +63,6 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// Turns `a.b.c=VALUE` into the merge patch {"a": {"b": {"c": VALUE}}}; VALUE is JSON, or a
-/// bare string when it does not parse as JSON.
-fn override_patch(spec: &str) -> Result<serde_json::Value, String> {
-    let (path, value) = spec
-        .split_once('=')
-        .ok_or_else(|| format!("expected PATH=JSON, got `{spec}`"))?;
-    let mut v: serde_json::Value =
-        serde_json::from_str(value).unwrap_or_else(|_| serde_json::Value::String(value.to_owned()));
-    for key in path.rsplit('.') {
-        let mut m = serde_json::Map::new();
-        m.insert(key.trim().to_owned(), v);
-        v = serde_json::Value::Object(m);
-    }
-    Ok(v)
-}
-
 fn params_for(sc: Scenario, args: &GenClutter) -> Result<ScenarioParams, String> {
     let mut p = ScenarioParams::preset(sc);
     if let Some(n) = args.frames {
@@ -89,9 +73,7 @@ fn params_for(sc: Scenario, args: &GenClutter) -> Result<ScenarioParams, String>
         p.height = h;
     }
     for spec in &args.set {
-        p = p
-            .with_overrides(&override_patch(spec)?)
-            .map_err(|e| e.to_string())?;
+        p = p.with_override(spec).map_err(|e| e.to_string())?;
     }
     p.validate().map_err(|e| e.to_string())?;
     Ok(p)
@@ -150,16 +132,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn override_specs_become_nested_merge_patches() {
-        assert_eq!(
-            override_patch("target.contrast_min=0.3").unwrap(),
-            serde_json::json!({"target": {"contrast_min": 0.3}})
-        );
-        assert_eq!(
-            override_patch("occluder=null").unwrap(),
-            serde_json::json!({"occluder": null})
-        );
-        assert!(override_patch("nonsense").is_err());
+    fn overrides_and_sizes_parse() {
+        let p = ScenarioParams::preset(Scenario::Occlusion);
+        let q = p.with_override("target.contrast_min=0.3").unwrap();
+        assert_eq!(q.target.contrast_min, 0.3);
+        assert!(p.with_override("occluder=null").unwrap().occluder.is_none());
+        assert!(p.with_override("nonsense").is_err());
         assert_eq!(parse_size("640x480").unwrap(), (640, 480));
         assert!(parse_size("640").is_err());
     }

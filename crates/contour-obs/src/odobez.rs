@@ -160,13 +160,10 @@ impl OdobezLikelihood {
         poses: &[Affine2],
         out: &mut [f64],
     ) -> Result<()> {
-        check_len("out", poses.len(), out.len())?;
-        for (index, (pose, o)) in poses.iter().zip(out.iter_mut()).enumerate() {
-            *o = self
-                .log_likelihood(ws, image, pose)
-                .map_err(|e| with_index(e, index))?;
-        }
-        Ok(())
+        let mode = Batch::Sequential(ws);
+        run_batch(mode, poses, [], out, |ws, pose, []| {
+            self.log_likelihood(ws, image, pose)
+        })
     }
 
     /// [`Self::log_likelihood_batch`] on the rayon thread pool, one workspace per task
@@ -182,12 +179,10 @@ impl OdobezLikelihood {
         poses: &[Affine2],
         out: &mut [f64],
     ) -> Result<()> {
-        check_len("out", poses.len(), out.len())?;
-        par_batch(
-            out,
-            || self.workspace(),
-            |ws, i| self.log_likelihood(ws, image, &poses[i]),
-        )
+        let mode = Batch::Parallel(&self.settings.lines);
+        run_batch(mode, poses, [], out, |ws, pose, []| {
+            self.log_likelihood(ws, image, pose)
+        })
     }
 }
 
@@ -195,28 +190,65 @@ impl OdobezLikelihood {
 /// a task and its workspace.
 const PAR_CHUNK: usize = 16;
 
-/// Fills `out[i] = eval(ws, i)` in parallel over chunks of [`PAR_CHUNK`] hypotheses, each chunk
-/// with its own workspace from `make_ws`, sequential inside. Each value is computed exactly as
-/// the sequential batch computes it, so the results are bit-identical; the error returned is the
-/// one of the lowest failing index, as in the sequential batch.
-pub(crate) fn par_batch<M, F>(out: &mut [f64], make_ws: M, eval: F) -> Result<()>
+/// How [`run_batch`] evaluates its hypotheses.
+pub(crate) enum Batch<'a> {
+    /// In order, on the caller's workspace, stopping at the first error.
+    Sequential(&'a mut MeasurementLines),
+    /// On the rayon thread pool over chunks of [`PAR_CHUNK`] hypotheses, each chunk sequential
+    /// inside and with its own workspace for these line settings.
+    Parallel(&'a LineSettings),
+}
+
+/// The batch driver behind every likelihood's `log_likelihood_batch` and
+/// `log_likelihood_batch_par`: `out[i] = eval(ws, &poses[i], [p[i] for each parameter p])`.
+///
+/// `params` are named per-hypothesis parameters, each holding one value shared by every pose or
+/// one value per pose. Lengths are checked first (`out`, then each parameter in order), and a
+/// per-pose error gets the index of its hypothesis. Both modes compute each value the same way,
+/// so their results are bit-identical, and both return the error of the lowest failing index.
+pub(crate) fn run_batch<const P: usize, F>(
+    mode: Batch<'_>,
+    poses: &[Affine2],
+    params: [(&'static str, &[f64]); P],
+    out: &mut [f64],
+    eval: F,
+) -> Result<()>
 where
-    M: Fn() -> Result<MeasurementLines> + Sync,
-    F: Fn(&mut MeasurementLines, usize) -> Result<f64> + Sync,
+    F: Fn(&mut MeasurementLines, &Affine2, [f64; P]) -> Result<f64> + Sync,
 {
-    let results: Vec<Result<()>> = out
-        .par_chunks_mut(PAR_CHUNK)
-        .enumerate()
-        .map(|(chunk, o)| {
-            let mut ws = make_ws()?;
-            for (j, v) in o.iter_mut().enumerate() {
-                let index = chunk * PAR_CHUNK + j;
-                *v = eval(&mut ws, index).map_err(|e| with_index(e, index))?;
+    let n = poses.len();
+    check_len("out", n, out.len())?;
+    for (what, values) in params {
+        if values.len() != 1 {
+            check_len(what, n, values.len())?;
+        }
+    }
+    let one = |ws: &mut MeasurementLines, index: usize| {
+        let picked = params.map(|(_, values)| values[if values.len() == 1 { 0 } else { index }]);
+        eval(ws, &poses[index], picked).map_err(|e| with_index(e, index))
+    };
+    match mode {
+        Batch::Sequential(ws) => {
+            for (index, o) in out.iter_mut().enumerate() {
+                *o = one(ws, index)?;
             }
             Ok(())
-        })
-        .collect();
-    results.into_iter().collect()
+        }
+        Batch::Parallel(lines) => {
+            let results: Vec<Result<()>> = out
+                .par_chunks_mut(PAR_CHUNK)
+                .enumerate()
+                .map(|(chunk, o)| {
+                    let mut ws = MeasurementLines::new(lines)?;
+                    for (j, v) in o.iter_mut().enumerate() {
+                        *v = one(&mut ws, chunk * PAR_CHUNK + j)?;
+                    }
+                    Ok(())
+                })
+                .collect();
+            results.into_iter().collect()
+        }
+    }
 }
 
 /// Re-creates the workspace if it was built for other line settings (allocates only then).
@@ -239,7 +271,7 @@ pub(crate) fn check_len(what: &'static str, expected: usize, got: usize) -> Resu
 }
 
 /// Puts the hypothesis index into a per-pose error.
-pub(crate) fn with_index(e: Error, index: usize) -> Error {
+fn with_index(e: Error, index: usize) -> Error {
     match e {
         Error::NonFinite { what, .. } => Error::NonFinite { what, index },
         Error::OutOfRange {

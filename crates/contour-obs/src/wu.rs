@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::math::{LnFactorial, log_add_exp};
-use crate::odobez::{check_len, ensure_workspace, par_batch, with_index};
+use crate::odobez::{Batch, check_len, ensure_workspace, run_batch};
 use crate::{Affine2, Contour, Error, GreyView, LineSettings, MeasurementLines, Result, Template};
 
 /// The largest window W in units of σ accepted by [`WuSettings::validate`].
@@ -315,18 +315,6 @@ fn check_gamma(gamma: f64, index: usize) -> Result<f64> {
     Ok(gamma)
 }
 
-/// Per-hypothesis parameter: one shared value or one per hypothesis.
-fn param(values: &[f64], n: usize, what: &'static str) -> Result<()> {
-    if values.len() != 1 && values.len() != n {
-        return Err(Error::LengthMismatch {
-            what,
-            expected: n,
-            got: values.len(),
-        });
-    }
-    Ok(())
-}
-
 /// The occlusion mixture for one line (Wu Eq. 11): log(γ p(Z_i|C) + (1 − γ) p(Z_i|x_i, C)).
 /// Exactly `log_clutter` at γ = 1 and `log_target` at γ = 0.
 pub fn occlusion_line_log(terms: LineTerms, gamma: f64) -> f64 {
@@ -451,15 +439,11 @@ impl WuLikelihood {
         lambdas: &[f64],
         out: &mut [f64],
     ) -> Result<()> {
-        check_len("out", poses.len(), out.len())?;
-        param(lambdas, poses.len(), "lambdas")?;
-        for (index, (pose, o)) in poses.iter().zip(out.iter_mut()).enumerate() {
-            let lambda = lambdas[if lambdas.len() == 1 { 0 } else { index }];
-            *o = self
-                .log_likelihood(ws, image, pose, lambda)
-                .map_err(|e| with_index(e, index))?;
-        }
-        Ok(())
+        let mode = Batch::Sequential(ws);
+        let params = [("lambdas", lambdas)];
+        run_batch(mode, poses, params, out, |ws, pose, [lambda]| {
+            self.log_likelihood(ws, image, pose, lambda)
+        })
     }
 
     /// [`Self::log_likelihood_batch`] on the rayon thread pool, one workspace per task
@@ -474,19 +458,12 @@ impl WuLikelihood {
         lambdas: &[f64],
         out: &mut [f64],
     ) -> Result<()> {
-        check_len("out", poses.len(), out.len())?;
-        param(lambdas, poses.len(), "lambdas")?;
-        par_batch(
-            out,
-            || self.workspace(),
-            |ws, i| self.log_likelihood(ws, image, &poses[i], pick(lambdas, i)),
-        )
+        let mode = Batch::Parallel(&self.settings.lines);
+        let params = [("lambdas", lambdas)];
+        run_batch(mode, poses, params, out, |ws, pose, [lambda]| {
+            self.log_likelihood(ws, image, pose, lambda)
+        })
     }
-}
-
-/// The shared value or the one of hypothesis `index` (lengths checked by `param`).
-fn pick(values: &[f64], index: usize) -> f64 {
-    values[if values.len() == 1 { 0 } else { index }]
 }
 
 /// Wu's occlusion likelihood p(Z | X, C, O) = Π_i {γ p(Z_i|C) + (1 − γ) p(Z_i|x_i, C)}
@@ -559,15 +536,11 @@ impl OcclusionLikelihood {
         gammas: &[f64],
         out: &mut [f64],
     ) -> Result<()> {
-        check_len("out", poses.len(), out.len())?;
-        param(lambdas, poses.len(), "lambdas")?;
-        param(gammas, poses.len(), "gammas")?;
-        for (index, (pose, o)) in poses.iter().zip(out.iter_mut()).enumerate() {
-            *o = self
-                .log_likelihood(ws, image, pose, pick(lambdas, index), pick(gammas, index))
-                .map_err(|e| with_index(e, index))?;
-        }
-        Ok(())
+        let mode = Batch::Sequential(ws);
+        let params = [("lambdas", lambdas), ("gammas", gammas)];
+        run_batch(mode, poses, params, out, |ws, pose, [l, g]| {
+            self.log_likelihood(ws, image, pose, l, g)
+        })
     }
 
     /// [`Self::log_likelihood_batch`] on the rayon thread pool, one workspace per task
@@ -583,14 +556,11 @@ impl OcclusionLikelihood {
         gammas: &[f64],
         out: &mut [f64],
     ) -> Result<()> {
-        check_len("out", poses.len(), out.len())?;
-        param(lambdas, poses.len(), "lambdas")?;
-        param(gammas, poses.len(), "gammas")?;
-        par_batch(
-            out,
-            || self.workspace(),
-            |ws, i| self.log_likelihood(ws, image, &poses[i], pick(lambdas, i), pick(gammas, i)),
-        )
+        let mode = Batch::Parallel(&self.wu.settings.lines);
+        let params = [("lambdas", lambdas), ("gammas", gammas)];
+        run_batch(mode, poses, params, out, |ws, pose, [l, g]| {
+            self.log_likelihood(ws, image, pose, l, g)
+        })
     }
 }
 

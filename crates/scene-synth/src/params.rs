@@ -455,6 +455,25 @@ impl ScenarioParams {
         p
     }
 
+    /// Applies one override written `dotted.path=VALUE` (VALUE is JSON, or a bare string when it
+    /// does not parse as JSON), e.g. `target.contrast_min=0.05` or `occluder=null`.
+    ///
+    /// # Errors
+    /// [`Error::Override`] for a spec without `=` or a value of the wrong type.
+    pub fn with_override(&self, spec: &str) -> Result<Self> {
+        let (path, value) = spec.split_once('=').ok_or_else(|| Error::Override {
+            reason: format!("expected PATH=JSON, got `{spec}`"),
+        })?;
+        let mut v: serde_json::Value = serde_json::from_str(value)
+            .unwrap_or_else(|_| serde_json::Value::String(value.to_owned()));
+        for key in path.rsplit('.') {
+            let mut m = serde_json::Map::new();
+            m.insert(key.trim().to_owned(), v);
+            v = serde_json::Value::Object(m);
+        }
+        self.with_overrides(&v)
+    }
+
     /// Applies a JSON merge patch (RFC 7386: objects merge, `null` deletes, anything else
     /// replaces) to these parameters, then validates the result.
     ///

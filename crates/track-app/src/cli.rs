@@ -13,7 +13,15 @@ use crate::{AppError, Result};
 /// Exit codes: 0 success; 1 a computation failed; 2 bad arguments or settings; 3 bad input data
 /// (images, ground truth, video); 4 an output could not be written.
 #[derive(Debug, Parser)]
-#[command(name = "track", version, about, long_about = None, propagate_version = true)]
+#[command(
+    name = "track",
+    version,
+    about = "Visual contour tracking with particle filters (Odobez et al. 2003, Wu et al. 2003)",
+    propagate_version = true,
+    after_help = "Start with `track demo`: it needs no input and writes ./track-demo/report.html.\n\n\
+        Exit codes: 0 success; 1 a computation failed; 2 bad arguments or settings; 3 bad input \
+        data (images, ground truth, video); 4 an output could not be written."
+)]
 pub struct Cli {
     /// The command to run.
     #[command(subcommand)]

@@ -25,14 +25,25 @@ pub struct SyntheticSequence {
 }
 
 impl SyntheticSequence {
-    /// Renders `scenario` with `frames` frames (`None`: the preset's length) and scene seed `seed`.
+    /// Renders `scenario` with `frames` frames (`None`: the preset's length), scene seed `seed`
+    /// and parameter overrides `dotted.path=JSON` (see `ScenarioParams::with_override`).
     ///
     /// # Errors
     /// [`AppError::InvalidSetting`] for parameters the generator rejects.
-    pub fn render(scenario: Scenario, frames: Option<usize>, seed: u64) -> Result<Self> {
+    pub fn render(
+        scenario: Scenario,
+        frames: Option<usize>,
+        seed: u64,
+        overrides: &[String],
+    ) -> Result<Self> {
         let mut params = ScenarioParams::preset(scenario);
         if let Some(n) = frames {
             params.frames = n;
+        }
+        for spec in overrides {
+            params = params
+                .with_override(spec)
+                .map_err(|e| AppError::setting("--set", e.to_string()))?;
         }
         let scene =
             Scene::new(&params, seed).map_err(|e| AppError::setting("--frames", e.to_string()))?;

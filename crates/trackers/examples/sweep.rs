@@ -79,9 +79,15 @@ fn main() {
         if let (Some(v), Some(w)) = (env("PD"), c.likelihood.clutter.as_mut()) {
             w.p_detect = v;
         }
-        if std::env::var("OA0").is_ok() { c.motion.occlusion_aware = false; }
-        if std::env::var("WS0").is_ok() { c.motion.warm_start = false; }
-        if std::env::var("DEFSET").is_ok() { c.motion.estimator = motion_est::Settings::default(); }
+        if std::env::var("OA0").is_ok() {
+            c.motion.occlusion_aware = false;
+        }
+        if std::env::var("WS0").is_ok() {
+            c.motion.warm_start = false;
+        }
+        if std::env::var("DEFSET").is_ok() {
+            c.motion.estimator = motion_est::Settings::default();
+        }
         let mut t = build(c).unwrap();
         let mut ious = vec![];
         for (k, (img, truth)) in frames.iter().enumerate() {

@@ -419,7 +419,7 @@ impl Tracker for ParticleTracker {
         let Some(mut set) = self.set.take() else {
             return Err(Error::NotInitialised);
         };
-        let current = frame.grey_view()?;
+        let current = frame.grey_view();
         let previous = contour_obs::GreyView::new(self.size.0, self.size.1, &self.previous)?;
         let observation = FrameObservation {
             model: &self.likelihood,

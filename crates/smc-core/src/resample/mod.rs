@@ -139,8 +139,8 @@ pub(crate) struct WeightSummary {
     pub last_positive: usize,
 }
 
-/// Validates the arguments of [`Resampler::resample`] and summarises the weights.
-pub(crate) fn summarise(weights: &[f64], output_size: usize) -> Result<WeightSummary> {
+/// Checks the arguments every scheme shares: at least one weight and at least one output slot.
+pub(crate) fn check_arguments(weights: &[f64], output_size: usize) -> Result<()> {
     if weights.is_empty() {
         return Err(Error::InvalidSetting {
             name: "weights",
@@ -153,6 +153,26 @@ pub(crate) fn summarise(weights: &[f64], output_size: usize) -> Result<WeightSum
             reason: "must be at least 1".into(),
         });
     }
+    Ok(())
+}
+
+/// The common start of [`Resampler::resample`]: validates and summarises the weights (leaving
+/// `ancestors` untouched on error), then empties `ancestors` and reserves room for `output_size`
+/// indices.
+pub(crate) fn prepare(
+    weights: &[f64],
+    output_size: usize,
+    ancestors: &mut Vec<usize>,
+) -> Result<WeightSummary> {
+    let summary = summarise(weights, output_size)?;
+    ancestors.clear();
+    ancestors.reserve(output_size);
+    Ok(summary)
+}
+
+/// Validates the arguments of [`Resampler::resample`] and summarises the weights.
+pub(crate) fn summarise(weights: &[f64], output_size: usize) -> Result<WeightSummary> {
+    check_arguments(weights, output_size)?;
     // One branch-free pass with four independent accumulators, so that the additions are not one
     // serial dependency chain. A NaN or +∞ shows in the sum, a negative value (−∞ included) in
     // the minimum; the slow scan below only runs on bad input. (Testing each weight with
@@ -193,11 +213,31 @@ pub(crate) fn summarise(weights: &[f64], output_size: usize) -> Result<WeightSum
             reason: Degeneracy::AllZero,
         });
     }
-    let last_positive = weights.iter().rposition(|&w| w > 0.0).unwrap_or(0);
     Ok(WeightSummary {
         total,
-        last_positive,
+        last_positive: last_positive(weights),
     })
+}
+
+/// The largest index with a positive weight (0 if there is none).
+pub(crate) fn last_positive(weights: &[f64]) -> usize {
+    weights.iter().rposition(|&w| w > 0.0).unwrap_or(0)
+}
+
+/// Appends the ⌊`expected`⌋ deterministic copies of particle `i` that residual and SSP
+/// resampling start from, and returns the fractional part `expected` − ⌊`expected`⌋ left to
+/// settle at random. Σ⌊M wᵢ⌋ ≤ M in exact arithmetic; rounding could overshoot by one, so the
+/// copies are capped to keep `ancestors` within `output_size`.
+pub(crate) fn push_floor_copies(
+    ancestors: &mut Vec<usize>,
+    i: usize,
+    expected: f64,
+    output_size: usize,
+) -> f64 {
+    let floor = expected.floor();
+    let copies = (floor as usize).min(output_size.saturating_sub(ancestors.len()));
+    ancestors.extend(std::iter::repeat_n(i, copies));
+    expected - floor
 }
 
 /// Offspring count of each of `n` particles given ancestor indices (out-of-range ones ignored).

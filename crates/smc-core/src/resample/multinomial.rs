@@ -4,7 +4,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, Exp1};
 use rand_pcg::Pcg64Mcg;
 
-use super::{Resampler, summarise};
+use super::{Resampler, WeightSummary, prepare};
 use crate::error::Result;
 
 /// Multinomial resampling: M independent draws from the categorical distribution of the weights.
@@ -26,18 +26,32 @@ impl Resampler for Multinomial {
         rng: &mut R,
         ancestors: &mut Vec<usize>,
     ) -> Result<()> {
-        let summary = summarise(normalized_weights, output_size)?;
-        ancestors.clear();
-        ancestors.reserve(output_size);
+        let summary = prepare(normalized_weights, output_size, ancestors)?;
+        fill_multinomial(normalized_weights, summary, output_size, rng, ancestors);
+        Ok(())
+    }
+}
+
+/// Fills the slots of `ancestors` still missing up to `output_size` (all of them after
+/// [`super::prepare`]) with multinomial draws from `weights`, summarised by `summary`; draws
+/// nothing from `rng` when none is missing.
+pub(crate) fn fill_multinomial<R: rand::Rng + ?Sized>(
+    weights: &[f64],
+    summary: WeightSummary,
+    output_size: usize,
+    rng: &mut R,
+    ancestors: &mut Vec<usize>,
+) {
+    let missing = output_size.saturating_sub(ancestors.len());
+    if missing > 0 {
         merge_sorted_uniforms(
-            normalized_weights.iter().copied(),
+            weights.iter().copied(),
             summary.total,
             summary.last_positive,
-            output_size,
+            missing,
             rng,
             ancestors,
         );
-        Ok(())
     }
 }
 

@@ -1,7 +1,7 @@
 //! Residual resampling (Liu & Chen 1998).
 
-use super::multinomial::merge_sorted_uniforms;
-use super::{Resampler, summarise};
+use super::multinomial::{fill_multinomial, merge_sorted_uniforms};
+use super::{Resampler, prepare, push_floor_copies};
 use crate::error::Result;
 
 /// Residual resampling: particle i first receives ⌊M wᵢ⌋ copies deterministically; the remaining
@@ -20,51 +20,38 @@ impl Resampler for Residual {
         rng: &mut R,
         ancestors: &mut Vec<usize>,
     ) -> Result<()> {
-        let summary = summarise(normalized_weights, output_size)?;
+        let summary = prepare(normalized_weights, output_size, ancestors)?;
         let scale = output_size as f64 / summary.total;
         let remainder = |w: f64| {
             let expected = w * scale;
             expected - expected.floor()
         };
-        ancestors.clear();
-        ancestors.reserve(output_size);
         let mut remainder_total = 0.0;
         let mut last_remainder = None;
         for (i, &w) in normalized_weights.iter().enumerate() {
-            let expected = w * scale;
-            let copies = expected.floor();
-            // Σ⌊M wᵢ⌋ ≤ M in exact arithmetic; rounding could overshoot by one, so cap.
-            let copies = (copies as usize).min(output_size - ancestors.len());
-            ancestors.extend(std::iter::repeat_n(i, copies));
-            let r = expected - expected.floor();
+            let r = push_floor_copies(ancestors, i, w * scale, output_size);
             if r > 0.0 {
                 remainder_total += r;
                 last_remainder = Some(i);
             }
         }
         let missing = output_size - ancestors.len();
-        if missing > 0 {
-            match last_remainder {
-                Some(last) if remainder_total > 0.0 => merge_sorted_uniforms(
-                    normalized_weights.iter().map(|&w| remainder(w)),
-                    remainder_total,
-                    last,
-                    missing,
-                    rng,
-                    ancestors,
-                ),
-                // Only reachable through rounding (all remainders zero yet slots left): fall back
-                // to plain multinomial draws.
-                _ => merge_sorted_uniforms(
-                    normalized_weights.iter().copied(),
-                    summary.total,
-                    summary.last_positive,
-                    missing,
-                    rng,
-                    ancestors,
-                ),
-            }
+        if missing > 0
+            && remainder_total > 0.0
+            && let Some(last) = last_remainder
+        {
+            merge_sorted_uniforms(
+                normalized_weights.iter().map(|&w| remainder(w)),
+                remainder_total,
+                last,
+                missing,
+                rng,
+                ancestors,
+            );
         }
+        // Slots can be left only through rounding (all remainders zero yet slots left): fall
+        // back to plain multinomial draws.
+        fill_multinomial(normalized_weights, summary, output_size, rng, ancestors);
         Ok(())
     }
 }

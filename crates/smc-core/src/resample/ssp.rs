@@ -1,8 +1,8 @@
 //! The Srinivasan sampling process (SSP) resampler (Gerber, Chopin & Whiteley 2019, after
 //! Srinivasan 2001).
 
-use super::multinomial::merge_sorted_uniforms;
-use super::{Resampler, summarise};
+use super::multinomial::fill_multinomial;
+use super::{Resampler, prepare, push_floor_copies};
 use crate::error::Result;
 
 /// SSP resampling: particle i first receives ⌊M wᵢ⌋ copies; the fractional parts δᵢ are then
@@ -31,10 +31,8 @@ impl Resampler for Ssp {
         rng: &mut R,
         ancestors: &mut Vec<usize>,
     ) -> Result<()> {
-        let summary = summarise(normalized_weights, output_size)?;
+        let summary = prepare(normalized_weights, output_size, ancestors)?;
         let scale = output_size as f64 / summary.total;
-        ancestors.clear();
-        ancestors.reserve(output_size);
         let push = |out: &mut Vec<usize>, i: usize| {
             if out.len() < output_size {
                 out.push(i);
@@ -42,12 +40,7 @@ impl Resampler for Ssp {
         };
         let mut active: Option<(usize, f64)> = None;
         for (i, &w) in normalized_weights.iter().enumerate() {
-            let expected = w * scale;
-            let floor = expected.floor();
-            // Σ⌊M wᵢ⌋ ≤ M in exact arithmetic; rounding could overshoot, so cap.
-            let copies = (floor as usize).min(output_size - ancestors.len());
-            ancestors.extend(std::iter::repeat_n(i, copies));
-            let delta = expected - floor;
+            let delta = push_floor_copies(ancestors, i, w * scale, output_size);
             if delta <= 0.0 {
                 continue;
             }
@@ -79,18 +72,8 @@ impl Resampler for Ssp {
         {
             push(ancestors, a);
         }
-        let missing = output_size - ancestors.len();
-        if missing > 0 {
-            // Only reachable through rounding: fill with multinomial draws.
-            merge_sorted_uniforms(
-                normalized_weights.iter().copied(),
-                summary.total,
-                summary.last_positive,
-                missing,
-                rng,
-                ancestors,
-            );
-        }
+        // Slots can be left only through rounding: fill them with multinomial draws.
+        fill_multinomial(normalized_weights, summary, output_size, rng, ancestors);
         Ok(())
     }
 }

@@ -1,6 +1,6 @@
 //! Stratified resampling (Kitagawa 1996).
 
-use super::{Resampler, summarise};
+use super::{Resampler, prepare};
 use crate::error::Result;
 
 /// Stratified resampling: one independent uniform in each stratum [j/M, (j+1)/M), j = 0..M, merged
@@ -16,16 +16,14 @@ impl Resampler for Stratified {
         rng: &mut R,
         ancestors: &mut Vec<usize>,
     ) -> Result<()> {
-        let summary = summarise(normalized_weights, output_size)?;
+        let summary = prepare(normalized_weights, output_size, ancestors)?;
         // Work in units of strata: cumulative weights scaled so that they end at M.
         let scale = output_size as f64 / summary.total;
         let last = summary.last_positive;
-        // Every slot is overwritten below; a reused buffer need not be zeroed first.
-        ancestors.resize(output_size, 0);
         let mut weights = normalized_weights.iter().copied();
         let mut i = 0usize;
         let mut cumulative = weights.next().unwrap_or(0.0) * scale;
-        for (j, slot) in ancestors.iter_mut().enumerate() {
+        for j in 0..output_size {
             let u = j as f64 + rng.random::<f64>();
             // Particle i owns [C_{i−1}, C_i); advance past every particle whose interval ends at or
             // before u (zero-weight ones included), but never beyond the last positive weight.
@@ -33,7 +31,7 @@ impl Resampler for Stratified {
                 i += 1;
                 cumulative += weights.next().unwrap_or(0.0) * scale;
             }
-            *slot = i;
+            ancestors.push(i);
         }
         Ok(())
     }

@@ -1,6 +1,6 @@
 //! Systematic resampling (Kitagawa 1996; Carpenter, Clifford & Fearnhead 1999).
 
-use super::{Resampler, summarise};
+use super::{Resampler, check_arguments, last_positive, summarise};
 use crate::error::Result;
 
 /// Systematic resampling: one uniform u ~ U[0, 1) and the evenly spaced grid j + 1 − u,
@@ -95,10 +95,7 @@ impl Systematic {
     /// once: the pass assumes Σw = 1 and checks the weights as it goes; only weights that turn
     /// out invalid or unnormalised are read again.
     fn run(weights: &[f64], output_size: usize, u: f64, out: &mut Vec<usize>) -> Result<()> {
-        if weights.is_empty() || output_size == 0 {
-            // `summarise` reports which argument is wrong.
-            summarise(weights, output_size)?;
-        }
+        check_arguments(weights, output_size)?;
         let mut pass = Self::fill(weights, output_size, 1.0, u, out);
         let valid = pass.total.is_finite() && pass.total > 0.0 && pass.min >= 0.0;
         if !valid || (pass.total - 1.0).abs() > NORMALISED_TOLERANCE {
@@ -107,11 +104,10 @@ impl Systematic {
         }
         // Rounding can leave the last grid point just beyond C_N; it belongs to the last particle
         // with positive weight.
-        if pass.filled < output_size {
-            let last_positive = weights.iter().rposition(|&w| w > 0.0).unwrap_or(0);
-            if let Some(slots) = out.get_mut(pass.filled..) {
-                slots.fill(last_positive);
-            }
+        if pass.filled < output_size
+            && let Some(slots) = out.get_mut(pass.filled..)
+        {
+            slots.fill(last_positive(weights));
         }
         Ok(())
     }

@@ -22,14 +22,15 @@ use crate::{AppError, Result};
 #[derive(Debug, clap::Args)]
 #[command(
     after_help = "Example:\n  track demo            # writes ./track-demo/report.html and friends\n  \
-    track demo --scenario mclutter --colour-by clutter --out demo-clutter"
+    track demo --scenario occlusion --colour-by status --out demo-occlusion"
 )]
 pub struct Args {
     /// Output folder.
     #[arg(long, default_value = "track-demo")]
     pub out: PathBuf,
-    /// The synthetic scenario.
-    #[arg(long, value_enum, default_value_t = ScenarioArg::Occlusion)]
+    /// The synthetic scenario (default: three regions of light, medium and heavy clutter that
+    /// the target wanders through, Wu Fig. 3 and 10).
+    #[arg(long, value_enum, default_value_t = ScenarioArg::Mclutter)]
     pub scenario: ScenarioArg,
     /// Tracker preset.
     #[arg(long, default_value = "full")]
@@ -40,8 +41,8 @@ pub struct Args {
     /// Seed of the tracker and of the scene.
     #[arg(long, default_value_t = DEFAULT_SEED)]
     pub seed: u64,
-    /// What colours the contour in overlays.
-    #[arg(long, value_enum, default_value_t)]
+    /// What colours the contour in overlays (default: the clutter class β̂, as in Wu Fig. 10).
+    #[arg(long, value_enum, default_value_t = ColourBy::Clutter)]
     pub colour_by: ColourBy,
     /// No summary on standard output.
     #[arg(long)]
@@ -59,7 +60,7 @@ pub fn run(args: &Args) -> Result<()> {
         return Err(AppError::setting("--particles", "must be at least 1"));
     }
     let config = preset.config(args.particles, args.seed);
-    let seq = SyntheticSequence::render(args.scenario.into(), None, args.seed)?;
+    let seq = SyntheticSequence::render(args.scenario.into(), None, args.seed, &[])?;
     let draw = DrawOptions {
         colour_by: args.colour_by,
         ..DrawOptions::default()

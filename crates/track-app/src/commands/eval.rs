@@ -48,6 +48,10 @@ pub enum Evaluation {
         /// Trackers (repeatable; default m1, m2, m3, full).
         #[arg(long = "tracker")]
         trackers: Vec<String>,
+        /// Override a scene parameter, `dotted.path=JSON` (repeatable), e.g.
+        /// `--set target.contrast_min=0.05` (see `cargo xtask gen-clutter --help`).
+        #[arg(long = "set", value_name = "PATH=JSON")]
+        set: Vec<String>,
         /// Folder for table1.md and table1.csv.
         #[arg(long, default_value = "track-eval")]
         out: PathBuf,
@@ -155,6 +159,7 @@ pub fn run(args: &Args) -> Result<()> {
             frames,
             scene_seed,
             trackers,
+            set,
             out,
             quiet,
         } => {
@@ -163,7 +168,7 @@ pub fn run(args: &Args) -> Result<()> {
                 positive("--frames", *f)?;
             }
             let trackers = presets(trackers, &TABLE1_TRACKERS)?;
-            let seq = SyntheticSequence::render((*scenario).into(), *frames, *scene_seed)?;
+            let seq = SyntheticSequence::render((*scenario).into(), *frames, *scene_seed, set)?;
             let bar = progress(
                 (trackers.len() * TABLE1_COLUMNS.len()) as u64,
                 *quiet,
@@ -172,10 +177,15 @@ pub fn run(args: &Args) -> Result<()> {
             let rows = table1(&seq, &trackers, &TABLE1_COLUMNS, *trials, &|| bar.inc(1))?;
             bar.finish_and_clear();
             let md = format!(
-                "Odobez Table 1 protocol on the synthetic `{}` scene ({} frames, scene seed {}).\n\n{}",
+                "Odobez Table 1 protocol on the synthetic `{}` scene ({} frames, scene seed {}{}).\n\n{}",
                 seq.name,
                 seq.frames.len(),
                 scene_seed,
+                if set.is_empty() {
+                    String::new()
+                } else {
+                    format!(", overrides {}", set.join(" "))
+                },
                 table1_markdown(&rows, &TABLE1_COLUMNS, *trials)
             );
             write_atomic(&out.join("table1.md"), md.as_bytes())?;
@@ -200,7 +210,7 @@ pub fn run(args: &Args) -> Result<()> {
             )?;
             let mut rows = Vec::new();
             for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
-                let seq = SyntheticSequence::render(scenario, *frames, 1)?;
+                let seq = SyntheticSequence::render(scenario, *frames, 1, &[])?;
                 for t in &trackers {
                     let output = seq.track(t.config(*particles, *seed), None)?;
                     rows.push(switching_scores(&seq, t.name(), &output.records));

@@ -10,6 +10,9 @@ use crate::{AppError, Result};
 
 /// Arguments of `track learn-clutter`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Examples:\n  \
+    track learn-clutter background/*.png --out clutter.json\n  \
+    track learn-clutter frame.png --lines 20000 --k 3 --seed 7")]
 pub struct Args {
     /// Training images (any format the `image` crate reads: PNG, JPEG, GIF), converted to grey.
     #[arg(required = true, value_name = "IMAGES")]

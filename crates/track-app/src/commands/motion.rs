@@ -32,6 +32,10 @@ impl From<ModelArg> for MotionModel {
 
 /// Arguments of `track motion`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Examples:\n  \
+    track motion a.png b.png --json\n  \
+    track motion a.png b.png --roi 128,46,104,127 --model affine --origin 180,110 --json\n  \
+    track motion a.png b.png --mask head.png --model scale --offset")]
 pub struct Args {
     /// The first frame (any grey or colour image; colour is converted to grey).
     pub frame0: PathBuf,
