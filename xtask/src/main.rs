@@ -27,7 +27,7 @@ struct GenClutter {
     /// Scenario preset: mclutter, occlusion, distractor or zoom.
     #[arg(long, required_unless_present = "all", conflicts_with = "all")]
     scenario: Option<String>,
-    /// Write every scenario into subfolders DIR/<scenario>.
+    /// Write every scenario into subfolders `DIR/<scenario>`.
     #[arg(long)]
     all: bool,
     /// Random seed (the output is a pure function of the parameters and the seed).

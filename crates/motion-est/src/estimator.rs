@@ -1056,63 +1056,100 @@ impl Workspace {
         o: [f64; 2],
         with_psi: bool,
     ) -> (Mat7, Vec7, Mat7) {
-        // Eight pixels at a time in f32 lanes (vectorisable), flushed to f64 every 64 groups so
-        // that f32 sums stay short.
+        // The weight functions in f32, monomorphised so that the lane loops vectorise. Tukey is
+        // written branch-free: t = max(1 − u, 0) gives w = t² and ψ' = t(1 − 5u), both 0 for u ≥ 1.
+        match robust {
+            RobustFunction::Tukey { c } => {
+                let ic2 = (1.0 / (c * c)) as f32;
+                self.normal_equations_spans::<N, _>(spec, s, o, with_psi, move |z: f32| {
+                    let u = z * z * ic2;
+                    let t = (1.0 - u).max(0.0);
+                    (t * t, t * (1.0 - 5.0 * u))
+                })
+            }
+            r => self.normal_equations_spans::<N, _>(spec, s, o, with_psi, move |z: f32| {
+                let z = f64::from(z);
+                (r.weight(z) as f32, r.psi_prime(z) as f32)
+            }),
+        }
+    }
+
+    /// The accumulation of [`normal_equations`](Self::normal_equations) over the row spans:
+    /// eight contiguous pixels at a time in f32 lanes (residual scaling, weights and Jacobian rows
+    /// all computed in the lanes), flushed to f64 every 64 groups so that f32 sums stay short.
+    fn normal_equations_spans<const N: usize, F: Fn(f32) -> (f32, f32)>(
+        &self,
+        spec: ModelSpec,
+        s: f64,
+        o: [f64; 2],
+        with_psi: bool,
+        weights: F,
+    ) -> (Mat7, Vec7, Mat7) {
         let ng = spec.model.geometric_len();
         let mut acc = Lanes::<N>::default();
         let mut h = [[0.0f64; N]; N];
         let mut hp = [[0.0f64; N]; N];
         let mut b = [0.0f64; N];
-        let mut j7 = [0.0f64; 7];
-        let inv_s = 1.0 / s;
-        let (mut lane, mut groups) = (0usize, 0usize);
-        let mut jl = [[0.0f32; 8]; N];
-        let (mut wl, mut wpl, mut rl) = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
-        for k in 0..self.idx.len() {
-            if self.valid[k] == 0 {
-                continue;
-            }
-            let r = f64::from(self.res[k]);
-            let z = r * inv_s;
-            let m = f64::from(self.m[k]);
-            let wgt = m * robust.weight(z);
-            let wp = if with_psi {
-                m * robust.psi_prime(z)
-            } else {
-                0.0
-            };
-            if wgt == 0.0 && wp == 0.0 {
-                continue;
-            }
-            let (x, y) = (f64::from(self.ax[k]) - o[0], f64::from(self.ay[k]) - o[1]);
-            spec.model
-                .gradient_row(f64::from(self.gx[k]), f64::from(self.gy[k]), x, y, &mut j7);
-            if spec.offset {
-                j7[ng] = -1.0;
-            }
-            for a in 0..N {
-                jl[a][lane] = j7[a] as f32;
-            }
-            wl[lane] = wgt as f32;
-            wpl[lane] = wp as f32;
-            rl[lane] = r as f32;
-            lane += 1;
-            if lane == 8 {
+        let inv_s = (1.0 / s) as f32;
+        let mut groups = 0usize;
+        for sp in &self.spans {
+            let y = (sp.j as f64 - o[1]) as f32;
+            let x_first = (sp.i0 as f64 - o[0]) as f32;
+            let mut t = 0;
+            while t < sp.len {
+                let cnt = (sp.len - t).min(8);
+                let k = sp.k0 + t;
+                let (mut rl, mut gxl, mut gyl, mut ml) =
+                    ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
+                for l in 0..cnt {
+                    // Invalid pixels get zero weight and zero values (theirs may be stale).
+                    if self.valid[k + l] != 0 {
+                        rl[l] = self.res[k + l];
+                        gxl[l] = self.gx[k + l];
+                        gyl[l] = self.gy[k + l];
+                        ml[l] = self.m[k + l];
+                    }
+                }
+                let (mut wl, mut wpl) = ([0.0f32; 8], [0.0f32; 8]);
+                for l in 0..8 {
+                    let (w, wp) = weights(rl[l] * inv_s);
+                    wl[l] = ml[l] * w;
+                    wpl[l] = ml[l] * wp;
+                }
+                let xl: [f32; 8] = std::array::from_fn(|l| x_first + (t + l) as f32);
+                // Jacobian rows as in `MotionModel::gradient_row`, y constant along the span.
+                let mut j7 = [[0.0f32; 8]; 7];
+                match spec.model {
+                    MotionModel::Translation => {
+                        j7[0] = gxl;
+                        j7[1] = gyl;
+                    }
+                    MotionModel::Scale => {
+                        j7[0] = gxl;
+                        j7[1] = gyl;
+                        j7[2] = std::array::from_fn(|l| gxl[l] * xl[l] + gyl[l] * y);
+                    }
+                    MotionModel::Affine => {
+                        j7[0] = gxl;
+                        j7[1] = std::array::from_fn(|l| gxl[l] * xl[l]);
+                        j7[2] = std::array::from_fn(|l| gxl[l] * y);
+                        j7[3] = gyl;
+                        j7[4] = std::array::from_fn(|l| gyl[l] * xl[l]);
+                        j7[5] = std::array::from_fn(|l| gyl[l] * y);
+                    }
+                }
+                if spec.offset {
+                    j7[ng] = [-1.0; 8];
+                }
+                let jl: [[f32; 8]; N] = std::array::from_fn(|a| j7[a]);
                 acc.add(&jl, &wl, &wpl, &rl, with_psi);
-                lane = 0;
                 groups += 1;
                 if groups == 64 {
                     acc.flush(&mut h, &mut hp, &mut b);
                     groups = 0;
                 }
+                t += 8;
             }
-        }
-        if lane > 0 {
-            for l in lane..8 {
-                wl[l] = 0.0;
-                wpl[l] = 0.0;
-            }
-            acc.add(&jl, &wl, &wpl, &rl, with_psi);
         }
         acc.flush(&mut h, &mut hp, &mut b);
         let mut hm = Mat7::zeros();

@@ -41,6 +41,8 @@ pub enum Command {
     Motion(commands::motion::Args),
     /// Learn clutter densities from images (Wu et al. §6.1).
     LearnClutter(commands::learn_clutter::Args),
+    /// Print a preset's full configuration (JSON or TOML), to edit and pass to `--config`.
+    Config(commands::config::Args),
 }
 
 /// Runs a parsed command line.
@@ -54,6 +56,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Eval(args) => commands::eval::run(&args),
         Command::Motion(args) => commands::motion::run(&args),
         Command::LearnClutter(args) => commands::learn_clutter::run(&args),
+        Command::Config(args) => commands::config::run(&args),
     }
 }
 

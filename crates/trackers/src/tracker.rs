@@ -39,7 +39,7 @@ pub struct Estimate {
     pub diagnostics: Option<StepDiagnostics>,
     /// β̂, its class probabilities and λ̂ (`None` without clutter switching).
     pub clutter: Option<ClutterEstimate>,
-    /// γ̂ = E[γ] (Wu Eq. 14), `None` without an occlusion model.
+    /// γ̂ = E\[γ\] (Wu Eq. 14), `None` without an occlusion model.
     pub gamma: Option<f64>,
     /// α̂ and its probabilities (`None` without the status HMM).
     pub status: Option<StatusEstimate>,

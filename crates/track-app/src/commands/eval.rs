@@ -6,7 +6,7 @@ use clap::Subcommand;
 use scene_synth::Scenario;
 use trackers::Preset;
 
-use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, progress, tracker_config};
+use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, Overrides, progress, tracker_config};
 use crate::evaluation::{
     SyntheticSequence, TABLE1_COLUMNS, TABLE1_TRACKERS, switching_csv, switching_markdown,
     switching_scores, table1, table1_csv, table1_markdown,
@@ -97,6 +97,10 @@ pub enum Evaluation {
         /// Tracker seed.
         #[arg(long, default_value_t = DEFAULT_SEED)]
         seed: u64,
+        /// Edge threshold of the measurement lines, grey levels per pixel (default: the
+        /// preset's, 8); see `track run --help`.
+        #[arg(long)]
+        edge_threshold: Option<f32>,
         /// Folder for otb.md and otb.csv.
         #[arg(long, default_value = "track-eval")]
         out: PathBuf,
@@ -227,6 +231,7 @@ pub fn run(args: &Args) -> Result<()> {
             trackers,
             particles,
             seed,
+            edge_threshold,
             out,
             quiet,
         } => {
@@ -235,7 +240,8 @@ pub fn run(args: &Args) -> Result<()> {
             for t in &trackers {
                 let mut per_tracker = Vec::new();
                 for dir in sequences {
-                    let m = evaluate_otb(dir, t.name(), *particles, *seed, *quiet)?;
+                    let m =
+                        evaluate_otb(dir, t.name(), *particles, *seed, *edge_threshold, *quiet)?;
                     rows.push((sequence_name(dir), t.name().to_owned(), m.clone()));
                     per_tracker.push(m);
                 }
@@ -264,6 +270,7 @@ fn evaluate_otb(
     tracker: &str,
     particles: usize,
     seed: u64,
+    edge_threshold: Option<f32>,
     quiet: bool,
 ) -> Result<SequenceMetrics> {
     let spec = dir.to_string_lossy();
@@ -278,7 +285,16 @@ fn evaluate_otb(
         first_labelled(&truth).ok_or_else(|| AppError::input(&gt_path, "no labelled frame"))?;
     init_box.validate_in_frame(info.width, info.height, "the first ground-truth box")?;
     let init = init_box.inscribed_ellipse();
-    let config = tracker_config(tracker, None, Some(particles), Some(seed), false)?;
+    let config = tracker_config(
+        tracker,
+        None,
+        Overrides {
+            particles: Some(particles),
+            seed: Some(seed),
+            parallel: false,
+            edge_threshold,
+        },
+    )?;
     let mut session = Session::new(
         trackers::build(config).map_err(|e| AppError::setting("--tracker", e.to_string()))?,
         None,
