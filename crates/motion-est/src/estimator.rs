@@ -1039,45 +1039,46 @@ impl Workspace {
         o: [f64; 2],
         with_psi: bool,
     ) -> (Mat7, Vec7, Mat7) {
-        match spec.len() {
-            2 => self.normal_equations_n::<2>(spec, robust, s, o, with_psi),
-            3 => self.normal_equations_n::<3>(spec, robust, s, o, with_psi),
-            4 => self.normal_equations_n::<4>(spec, robust, s, o, with_psi),
-            6 => self.normal_equations_n::<6>(spec, robust, s, o, with_psi),
-            _ => self.normal_equations_n::<7>(spec, robust, s, o, with_psi),
-        }
-    }
-
-    fn normal_equations_n<const N: usize>(
-        &self,
-        spec: ModelSpec,
-        robust: RobustFunction,
-        s: f64,
-        o: [f64; 2],
-        with_psi: bool,
-    ) -> (Mat7, Vec7, Mat7) {
         // The weight functions in f32, monomorphised so that the lane loops vectorise. Tukey is
         // written branch-free: t = max(1 − u, 0) gives w = t² and ψ' = t(1 − 5u), both 0 for u ≥ 1.
         match robust {
             RobustFunction::Tukey { c } => {
                 let ic2 = (1.0 / (c * c)) as f32;
-                self.normal_equations_spans::<N, _>(spec, s, o, with_psi, move |z: f32| {
+                self.accumulate(spec, s, o, with_psi, move |z: f32, m: f32| {
                     let u = z * z * ic2;
                     let t = (1.0 - u).max(0.0);
-                    (t * t, t * (1.0 - 5.0 * u))
+                    (m * t * t, m * t * (1.0 - 5.0 * u))
                 })
             }
-            r => self.normal_equations_spans::<N, _>(spec, s, o, with_psi, move |z: f32| {
+            r => self.accumulate(spec, s, o, with_psi, move |z: f32, m: f32| {
                 let z = f64::from(z);
-                (r.weight(z) as f32, r.psi_prime(z) as f32)
+                (m * r.weight(z) as f32, m * r.psi_prime(z) as f32)
             }),
+        }
+    }
+
+    /// Σ w J Jᵀ, Σ w J r and, with `second`, Σ w₂ J Jᵀ, where (w, w₂) = `weights(r/s, m)`.
+    fn accumulate<F: Fn(f32, f32) -> (f32, f32)>(
+        &self,
+        spec: ModelSpec,
+        s: f64,
+        o: [f64; 2],
+        second: bool,
+        weights: F,
+    ) -> (Mat7, Vec7, Mat7) {
+        match spec.len() {
+            2 => self.normal_equations_spans::<2, _>(spec, s, o, second, weights),
+            3 => self.normal_equations_spans::<3, _>(spec, s, o, second, weights),
+            4 => self.normal_equations_spans::<4, _>(spec, s, o, second, weights),
+            6 => self.normal_equations_spans::<6, _>(spec, s, o, second, weights),
+            _ => self.normal_equations_spans::<7, _>(spec, s, o, second, weights),
         }
     }
 
     /// The accumulation of [`normal_equations`](Self::normal_equations) over the row spans:
     /// eight contiguous pixels at a time in f32 lanes (residual scaling, weights and Jacobian rows
     /// all computed in the lanes), flushed to f64 every 64 groups so that f32 sums stay short.
-    fn normal_equations_spans<const N: usize, F: Fn(f32) -> (f32, f32)>(
+    fn normal_equations_spans<const N: usize, F: Fn(f32, f32) -> (f32, f32)>(
         &self,
         spec: ModelSpec,
         s: f64,
@@ -1112,9 +1113,7 @@ impl Workspace {
                 }
                 let (mut wl, mut wpl) = ([0.0f32; 8], [0.0f32; 8]);
                 for l in 0..8 {
-                    let (w, wp) = weights(rl[l] * inv_s);
-                    wl[l] = ml[l] * w;
-                    wpl[l] = ml[l] * wp;
+                    (wl[l], wpl[l]) = weights(rl[l] * inv_s, ml[l]);
                 }
                 let xl: [f32; 8] = std::array::from_fn(|l| x_first + (t + l) as f32);
                 // Jacobian rows as in `MotionModel::gradient_row`, y constant along the span.
@@ -1185,13 +1184,24 @@ impl Workspace {
         let c = robust.c();
         // Sensitivity H = Σ m ψ' J Jᵀ; when too many residuals sit where ψ' < 0 it may not be
         // positive definite, and the IRLS matrix (its expectation under a clean fit) is used.
-        let (hw, _, hs) = self.normal_equations(spec, robust, s, o, true);
+        // One pass gives the sensitivity and the same-pixel term Σ m² J Jᵀ over the pixels a
+        // redescending ρ does not reject (those carry no noise into Θ̂).
+        let rej2 = robust.rejection().map(|r| (r * r) as f32);
+        let (diag, _, hs) = self.accumulate(spec, s, o, true, move |z: f32, m: f32| {
+            let keep = rej2.is_none_or(|r2| z * z < r2);
+            let w = if keep { m * m } else { 0.0 };
+            (w, m * robust.psi_prime(f64::from(z)) as f32)
+        });
         let mut hpad = hs;
         for i in n..7 {
             hpad[(i, i)] = 1.0;
         }
         let use_psi = hpad.cholesky().is_some();
-        let mut sens = if use_psi { hs } else { hw };
+        let mut sens = if use_psi {
+            hs
+        } else {
+            self.normal_equations(spec, robust, s, o, false).0
+        };
         for i in n..7 {
             sens[(i, i)] = 1.0;
         }
@@ -1207,46 +1217,47 @@ impl Workspace {
         let (mut gain, mut n_in, mut m_in, mut m_all) = (0.0f64, 0usize, 0.0f64, 0.0f64);
         self.u.clear();
         self.u.resize(self.idx.len(), [0.0; 8]);
-        let mut j = [0.0f64; 7];
         let (e1, e2) = moments;
+        let e1f = e1 as f32;
         let rejection = robust.rejection();
-        let mut diag = Mat7::zeros();
-        let mut diag_acc = [[0.0f64; 7]; 7];
-        for k in 0..self.idx.len() {
-            m_all += f64::from(self.m[k]);
-            if self.valid[k] == 0 {
-                continue;
-            }
-            let z = f64::from(self.res[k]) / s;
-            if z.abs() < c {
-                let (fx, fy) = (f64::from(self.fx[k]), f64::from(self.fy[k]));
-                gain += ka * ka + q(fx) * q(fy);
-                n_in += 1;
-                m_in += f64::from(self.m[k]);
-            }
-            // Pixels a redescending ρ rejects carry no noise into Θ̂.
-            if rejection.is_some_and(|r| z.abs() >= r) {
-                continue;
-            }
-            let m = f64::from(self.m[k]);
-            let (x, y) = (f64::from(self.ax[k]) - o[0], f64::from(self.ay[k]) - o[1]);
-            spec.model
-                .gradient_row(f64::from(self.gx[k]), f64::from(self.gy[k]), x, y, &mut j);
-            if spec.offset {
-                j[ng] = -1.0;
-            }
-            for a in 0..n {
-                self.u[k][a] = (m * e1 * j[a]) as f32;
-                let mja = m * m * j[a];
-                for b in a..n {
-                    diag_acc[a][b] += mja * j[b];
+        for sp in &self.spans {
+            let y = (sp.j as f64 - o[1]) as f32;
+            let x_first = (sp.i0 as f64 - o[0]) as f32;
+            for k in sp.k0..sp.k0 + sp.len {
+                m_all += f64::from(self.m[k]);
+                if self.valid[k] == 0 {
+                    continue;
                 }
-            }
-        }
-        for a in 0..n {
-            for b in a..n {
-                diag[(a, b)] = diag_acc[a][b];
-                diag[(b, a)] = diag_acc[a][b];
+                let z = f64::from(self.res[k]) / s;
+                if z.abs() < c {
+                    let (fx, fy) = (f64::from(self.fx[k]), f64::from(self.fy[k]));
+                    gain += ka * ka + q(fx) * q(fy);
+                    n_in += 1;
+                    m_in += f64::from(self.m[k]);
+                }
+                // Pixels a redescending ρ rejects carry no noise into Θ̂.
+                if rejection.is_some_and(|r| z.abs() >= r) {
+                    continue;
+                }
+                let me = self.m[k] * e1f;
+                let (gx, gy) = (self.gx[k] * me, self.gy[k] * me);
+                let x = x_first + (k - sp.k0) as f32;
+                let u = &mut self.u[k];
+                match spec.model {
+                    MotionModel::Translation => {
+                        (u[0], u[1]) = (gx, gy);
+                    }
+                    MotionModel::Scale => {
+                        (u[0], u[1], u[2]) = (gx, gy, gx * x + gy * y);
+                    }
+                    MotionModel::Affine => {
+                        (u[0], u[1], u[2]) = (gx, gx * x, gx * y);
+                        (u[3], u[4], u[5]) = (gy, gy * x, gy * y);
+                    }
+                }
+                if spec.offset {
+                    u[ng] = -me;
+                }
             }
         }
         if n_in == 0 {

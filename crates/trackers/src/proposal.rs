@@ -301,4 +301,90 @@ mod tests {
             -0.5 * (1.0 + 1.0 + 0.25) - (2.0f64).ln() - 2.0 * (2.0 * std::f64::consts::PI).ln();
         assert!((m.log_density(ShapeSpace::Odobez, &[0.0; 6], &x) - expected).abs() < 1e-12);
     }
+
+    fn setup() -> (
+        crate::dynamics::TrackerDynamics,
+        Vec<ClusterMotion>,
+        Particle,
+    ) {
+        use crate::dynamics::{ClutterProcess, DynamicsSettings, OcclusionModel, TrackerDynamics};
+        let dynamics = TrackerDynamics {
+            space: ShapeSpace::Odobez,
+            settings: DynamicsSettings::default(),
+            clutter: ClutterProcess::Fixed(0.05),
+            occlusion: OcclusionModel::None,
+            scale_bounds: (2.0, 1e4),
+        };
+        let mut cov = Matrix6::zeros();
+        cov[(0, 0)] = 0.5;
+        cov[(1, 1)] = 0.3;
+        cov[(0, 1)] = 0.1;
+        cov[(1, 0)] = 0.1;
+        let sigmas = dynamics
+            .settings
+            .sigmas(ShapeSpace::Odobez, &[100.0, 80.0, 25.0, 1.0, 0.0, 0.0]);
+        let motion = ClusterMotion::new(
+            ShapeSpace::Odobez,
+            [2.0, -1.0, 0.3, 0.0, 0.0, 0.0],
+            &cov,
+            &sigmas,
+            true,
+        )
+        .unwrap();
+        let mut p = Particle::at_rest(
+            [100.0, 80.0, 25.0, 1.0, 0.0, 0.0],
+            dbn_switch::ClutterState {
+                beta: 0,
+                lambda: 0.05,
+            },
+            crate::particle::default_status(),
+        );
+        p.cluster = 0;
+        (dynamics, vec![motion], p)
+    }
+
+    #[test]
+    fn motion_consistency_equals_the_proposal_density_so_eq_24_holds() {
+        // p_c1 (Eq. 21) of a propagated particle is the motion proposal's density (Eq. 16) of
+        // the same move: their ratio in Eq. 3 is exactly 1, which is Odobez's Eq. 24.
+        use rand::SeedableRng;
+        use smc_core::Proposal;
+        let (dynamics, clusters, previous) = setup();
+        let q = MotionProposal {
+            dynamics: &dynamics,
+            clusters: &clusters,
+            occlusion_aware: false,
+        };
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+        for _ in 0..20 {
+            let next = q.sample(0, &previous, &mut rng);
+            let log_q = q.log_density(0, &previous, &next);
+            let log_pc1 = log_motion_consistency(ShapeSpace::Odobez, &clusters, &next);
+            assert!((log_q - log_pc1).abs() < 1e-12, "{log_q} vs {log_pc1}");
+        }
+    }
+
+    #[test]
+    fn occlusion_aware_density_is_the_gamma_mixture() {
+        use smc_core::Proposal;
+        let (dynamics, clusters, mut previous) = setup();
+        previous.status.gamma = 0.3;
+        let mut next = previous;
+        next.prev = previous.now;
+        next.now = [101.5, 79.0, 25.2, 1.0, 0.0, 0.0];
+        let aware = MotionProposal {
+            dynamics: &dynamics,
+            clusters: &clusters,
+            occlusion_aware: true,
+        };
+        let plain = MotionProposal {
+            dynamics: &dynamics,
+            clusters: &clusters,
+            occlusion_aware: false,
+        };
+        let expected = (0.7 * plain.log_density(0, &previous, &next).exp()
+            + 0.3 * dynamics.log_kinematic_density(&previous, &next).exp())
+        .ln();
+        assert!((aware.log_density(0, &previous, &next) - expected).abs() < 1e-10);
+    }
 }
