@@ -219,6 +219,8 @@ pub struct Workspace {
     fx: Vec<f32>,
     fy: Vec<f32>,
     qi: Vec<u32>,
+    /// Integer sample positions of the listed pixels, for the covariance grids.
+    pos: Vec<(u32, u32)>,
     u: Vec<[f32; 8]>,
     valid: Vec<u8>,
     scratch: Vec<f32>,
@@ -966,6 +968,65 @@ impl Workspace {
         let (xmax, ymax) = ((w1 - 1) as f64, (h1 - 1) as f64);
         let (d1, d0) = (&l1.data[..], &l0.data[..]);
         let mut n_valid = 0;
+        if full_res {
+            // Full resolution: the sample loop computes only the residual and where it was taken;
+            // the Jacobian's gradients (the first frame's, mapped through (I + D)^−T) are read from
+            // contiguous rows in a second, vectorisable loop. A span's pixels are consecutive in
+            // the first frame's level, so its rows there are plain slices.
+            for sp in &self.spans {
+                let y = sp.j as f64;
+                let (qx0, qy0) = (cx + bx2 * y, cy + by2 * y);
+                let r = sp.k0..sp.k0 + sp.len;
+                let first = self.idx[sp.k0] as usize;
+                let z0 = &d0[first..first + sp.len];
+                let out = self.res[r.clone()]
+                    .iter_mut()
+                    .zip(&mut self.fx[r.clone()])
+                    .zip(&mut self.fy[r.clone()])
+                    .zip(&mut self.qi[r.clone()])
+                    .zip(&mut self.valid[r.clone()])
+                    .zip(z0);
+                for (t, (((((res, fxo), fyo), qio), valid), &z0)) in out.enumerate() {
+                    let x = (sp.i0 + t) as f64;
+                    let qx = qx0 + bx1 * x;
+                    let qy = qy0 + by1 * x;
+                    if !(qx >= 0.0 && qy >= 0.0 && qx <= xmax && qy <= ymax) {
+                        *valid = 0;
+                        continue;
+                    }
+                    let ix = (qx as usize).min(w1 - 2);
+                    let iy = (qy as usize).min(h1 - 2);
+                    let fx = (qx - ix as f64) as f32;
+                    let fy = (qy - iy as f64) as f32;
+                    let i00 = iy * w1 + ix;
+                    // Bicubic values: bilinear interpolation error on fine texture would bias the
+                    // estimate and inflate the residual scale.
+                    let v = if ix >= 1 && iy >= 1 && ix + 2 < w1 && iy + 2 < h1 {
+                        bicubic(d1, i00, w1, fx, fy)
+                    } else {
+                        bilinear(d1, i00, w1, fx, fy)
+                    };
+                    *res = v - z0 - c;
+                    // Where the sample came from sets the interpolated noise (see `covariance`).
+                    *fxo = fx;
+                    *fyo = fy;
+                    *qio = i00 as u32;
+                    *valid = 1;
+                    n_valid += 1;
+                }
+                let (g0x, g0y) = (&l0.gx[first..first + sp.len], &l0.gy[first..first + sp.len]);
+                let grads = self.gx[r.clone()]
+                    .iter_mut()
+                    .zip(&mut self.gy[r])
+                    .zip(g0x)
+                    .zip(g0y);
+                for (((gxo, gyo), &ax), &ay) in grads {
+                    *gxo = t11 * ax + t12 * ay;
+                    *gyo = t21 * ax + t22 * ay;
+                }
+            }
+            return n_valid;
+        }
         // Row by row: q moves by (bx1, by1) per pixel, and each span's outputs are sliced once so
         // that the inner loop carries no bounds checks on them.
         for sp in &self.spans {
@@ -1297,22 +1358,27 @@ impl Workspace {
         } else {
             (0, 0)
         };
-        let pos = |k: usize| -> (usize, usize) {
-            match l1 {
-                None => (self.ax[k] as usize, self.ay[k] as usize),
-                Some(l) => (self.qi[k] as usize % l.width, self.qi[k] as usize / l.width),
-            }
-        };
-        let (mut minx, mut miny, mut maxx, mut maxy) = (usize::MAX, usize::MAX, 0usize, 0usize);
+        // Tap positions once per pixel (one 32-bit division for the second frame), then the box.
+        self.pos.clear();
+        let w1 = l1.map_or(1, |l| l.width as u32);
         for k in 0..self.idx.len() {
-            if self.valid[k] == 0 {
+            self.pos.push(match l1 {
+                None => (self.ax[k] as u32, self.ay[k] as u32),
+                Some(_) => {
+                    let y = self.qi[k] / w1;
+                    (self.qi[k] - y * w1, y)
+                }
+            });
+        }
+        let (mut minx, mut miny, mut maxx, mut maxy) = (usize::MAX, usize::MAX, 0usize, 0usize);
+        for (&(x, y), &v) in self.pos.iter().zip(&self.valid) {
+            if v == 0 {
                 continue;
             }
-            let (x, y) = pos(k);
-            minx = minx.min(x);
-            maxx = maxx.max(x);
-            miny = miny.min(y);
-            maxy = maxy.max(y);
+            minx = minx.min(x as usize);
+            maxx = maxx.max(x as usize);
+            miny = miny.min(y as usize);
+            maxy = maxy.max(y as usize);
         }
         if minx > maxx {
             return Mat7::zeros();
@@ -1332,7 +1398,7 @@ impl Workspace {
             if u[..n].iter().all(|&v| v == 0.0) {
                 continue;
             }
-            let (x, y) = pos(k);
+            let (x, y) = (self.pos[k].0 as usize, self.pos[k].1 as usize);
             match l1 {
                 None => {
                     let cell = (y as isize - oy) as usize * bw + (x as isize - ox) as usize;

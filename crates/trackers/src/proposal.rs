@@ -211,7 +211,7 @@ impl smc_core::Proposal for MotionProposal<'_> {
                 }
                 self.dynamics
                     .space
-                    .clamp(&mut next.now, self.dynamics.scale_bounds);
+                    .clamp(&mut next.now, &self.dynamics.bounds);
             }
             _ => next.now = self.dynamics.sample_kinematics(previous, rng),
         }
@@ -313,7 +313,7 @@ mod tests {
             settings: DynamicsSettings::default(),
             clutter: ClutterProcess::Fixed(0.05),
             occlusion: OcclusionModel::None,
-            scale_bounds: (2.0, 1e4),
+            bounds: crate::space::ShapeBounds::loose(2.0),
         };
         let mut cov = Matrix6::zeros();
         cov[(0, 0)] = 0.5;

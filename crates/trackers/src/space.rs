@@ -5,6 +5,7 @@
 //! - [`ShapeSpace::Affine`]: Wu's X = (a11, a12, a21, a22, t1, t2) (Wu §6).
 
 use contour_obs::{Affine2, Ellipse};
+use nalgebra::Matrix2;
 use serde::{Deserialize, Serialize};
 
 /// Number of slots of a state vector.
@@ -79,31 +80,74 @@ impl ShapeSpace {
         }
     }
 
-    /// Keeps a sampled state inside the valid domain: mean radius within `[min, max]` pixels
-    /// and, for Odobez, the aspect ratio in [1/4, 4]. Heavy-tailed (Cauchy) noise can otherwise
-    /// produce a negative scale, which has no contour, and a contour can otherwise shrink onto a
-    /// corner of the image where any likelihood is easy to satisfy.
-    pub fn clamp(self, x: &mut StateVector, (min, max): (f64, f64)) {
+    /// Keeps a sampled state inside the valid domain `bounds`: mean radius within
+    /// `bounds.scale` pixels and elongation within `bounds.aspect` (Odobez: e in that range;
+    /// affine: the ratio of the singular values of A at most `bounds.aspect.1`, the area kept).
+    /// Heavy-tailed (Cauchy) noise can otherwise produce a negative scale, which has no contour,
+    /// and a contour can otherwise collapse onto a thin bar of clutter that fits its lines.
+    pub fn clamp(self, x: &mut StateVector, bounds: &ShapeBounds) {
+        let (min, max) = bounds.scale;
         match self {
             ShapeSpace::Odobez => {
                 x[2] = x[2].clamp(min, max);
-                x[3] = x[3].clamp(0.25, 4.0);
+                x[3] = x[3].clamp(bounds.aspect.0, bounds.aspect.1);
             }
             ShapeSpace::Affine => {
-                let s = self.scale(x);
-                if (min..=max).contains(&s) {
+                let a = Matrix2::new(x[0], x[1], x[2], x[3]);
+                let svd = a.svd(true, true);
+                let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+                    *x = [min, 0.0, 0.0, min, x[4], x[5]];
+                    return;
+                };
+                let (s1, s2) = (svd.singular_values[0], svd.singular_values[1]);
+                let scale = (s1 * s2).sqrt();
+                if !(scale > 1e-9) {
+                    *x = [min, 0.0, 0.0, min, x[4], x[5]];
                     return;
                 }
-                if s > 1e-9 {
-                    let r = s.clamp(min, max) / s;
-                    for v in &mut x[..4] {
-                        *v *= r;
-                    }
-                } else {
-                    let centre = [x[4], x[5]];
-                    *x = [min, 0.0, 0.0, min, centre[0], centre[1]];
+                // Limit the elongation, keeping the area, then the scale.
+                let ratio = (s1 / s2.max(1e-12)).min(bounds.aspect.1.max(1.0));
+                let target = scale.clamp(min, max);
+                let (t1, t2) = (target * ratio.sqrt(), target / ratio.sqrt());
+                if (t1 - s1).abs() > 1e-12 * s1 || (t2 - s2).abs() > 1e-12 * s1 {
+                    let m = u * Matrix2::new(t1, 0.0, 0.0, t2) * v_t;
+                    x[0] = m[(0, 0)];
+                    x[1] = m[(0, 1)];
+                    x[2] = m[(1, 0)];
+                    x[3] = m[(1, 1)];
                 }
             }
+        }
+    }
+
+    /// The elongation of a state: e for Odobez, the ratio of the singular values of A (≥ 1)
+    /// for affine.
+    pub fn elongation(self, x: &StateVector) -> f64 {
+        match self {
+            ShapeSpace::Odobez => x[3],
+            ShapeSpace::Affine => {
+                let sv = Matrix2::new(x[0], x[1], x[2], x[3]).singular_values();
+                sv[0].max(sv[1]) / sv[0].min(sv[1]).max(1e-12)
+            }
+        }
+    }
+}
+
+/// The domain a tracker's states are kept in (see [`ShapeSpace::clamp`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShapeBounds {
+    /// Smallest and largest mean radius, pixels.
+    pub scale: (f64, f64),
+    /// Smallest and largest elongation (Odobez e; affine: only the upper bound is used).
+    pub aspect: (f64, f64),
+}
+
+impl ShapeBounds {
+    /// Bounds that only keep a state valid: radius ≥ `min_scale`, e in [1/4, 4].
+    pub fn loose(min_scale: f64) -> Self {
+        Self {
+            scale: (min_scale, f64::INFINITY),
+            aspect: (0.25, 4.0),
         }
     }
 }
@@ -160,8 +204,29 @@ mod tests {
     #[test]
     fn clamp_restores_a_positive_scale() {
         let mut x = [10.0, 10.0, -3.0, 9.0, 0.0, 0.0];
-        ShapeSpace::Odobez.clamp(&mut x, (2.0, 100.0));
+        ShapeSpace::Odobez.clamp(&mut x, &ShapeBounds::loose(2.0));
         assert_eq!(x[2], 2.0);
         assert_eq!(x[3], 4.0);
+    }
+
+    #[test]
+    fn affine_elongation_is_limited_keeping_area_and_orientation() {
+        let e = Ellipse {
+            cx: 0.0,
+            cy: 0.0,
+            a: 40.0,
+            b: 10.0,
+            theta: 0.4,
+        };
+        let mut x = ShapeSpace::Affine.from_ellipse(&e);
+        let bounds = ShapeBounds {
+            scale: (2.0, 1e3),
+            aspect: (0.5, 2.0),
+        };
+        ShapeSpace::Affine.clamp(&mut x, &bounds);
+        let back = ShapeSpace::Affine.pose(&x).to_ellipse().unwrap();
+        assert!((back.a / back.b - 2.0).abs() < 1e-9);
+        assert!((back.a * back.b - 400.0).abs() < 1e-6);
+        assert!((back.theta - 0.4).abs() < 1e-9);
     }
 }

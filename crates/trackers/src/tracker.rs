@@ -19,7 +19,7 @@ use crate::frame::Frame;
 use crate::observation::{FrameObservation, LikelihoodModel};
 use crate::particle::{Particle, default_status};
 use crate::proposal::{ClusterMotion, MotionProposal, state_increment};
-use crate::space::{STATE_SLOTS, StateVector, axpy, pose_box};
+use crate::space::{STATE_SLOTS, ShapeBounds, StateVector, axpy, pose_box};
 use crate::{Error, Result};
 
 /// What a tracker reports for one frame.
@@ -141,7 +141,7 @@ impl ParticleTracker {
                 settings: config.dynamics,
                 clutter,
                 occlusion,
-                scale_bounds: (config.dynamics.min_scale, f64::INFINITY),
+                bounds: ShapeBounds::loose(config.dynamics.min_scale),
             },
             likelihood: LikelihoodModel::new(config.space, &config.likelihood)?,
             filter: ParticleFilter::new(config.filter.clone())?,
@@ -364,11 +364,18 @@ impl Tracker for ParticleTracker {
         let space = self.config.space;
         let centre = space.from_ellipse(&ellipse);
         let s0 = space.scale(&centre);
-        let [lo, hi] = self.config.dynamics.scale_range;
-        self.dynamics.scale_bounds = (
-            (lo * s0).max(self.config.dynamics.min_scale),
-            (hi * s0).max(self.config.dynamics.min_scale),
-        );
+        let d = &self.config.dynamics;
+        let (e0, min) = (space.elongation(&centre), d.min_scale);
+        self.dynamics.bounds = ShapeBounds {
+            scale: (
+                (d.scale_range[0] * s0).max(min),
+                (d.scale_range[1] * s0).max(min),
+            ),
+            aspect: (
+                (d.aspect_range[0] * e0).max(0.25),
+                (d.aspect_range[1] * e0).min(4.0).max(1.0),
+            ),
+        };
         let sigmas = self.dynamics.settings.sigmas(space, &centre);
         let spread = self.config.init_spread;
         let particles: Vec<Particle> = (0..self.config.particles)
@@ -379,7 +386,7 @@ impl Tracker for ParticleTracker {
                     let z: f64 = StandardNormal.sample(&mut rng);
                     x[j] += spread * sigmas[j] * z;
                 }
-                space.clamp(&mut x, self.dynamics.scale_bounds);
+                space.clamp(&mut x, &self.dynamics.bounds);
                 let (clutter, status) = self.initial_hidden(i);
                 Particle::at_rest(x, clutter, status)
             })
