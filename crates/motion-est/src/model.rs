@@ -47,7 +47,9 @@ impl MotionModel {
 
     /// Derivatives of the displacement with respect to the parameters, contracted with the image
     /// gradient (gx, gy): ∂(∇I·d)/∂p. Writes [`geometric_len`](Self::geometric_len) values.
-    #[inline]
+    /// The estimator computes these rows in f32 lanes; this scalar form is the reference its tests
+    /// compare against.
+    #[cfg(test)]
     pub(crate) fn gradient_row(self, gx: f64, gy: f64, x: f64, y: f64, out: &mut [f64; 7]) {
         match self {
             MotionModel::Translation => {
