@@ -101,7 +101,7 @@ impl ShapeSpace {
                 };
                 let (s1, s2) = (svd.singular_values[0], svd.singular_values[1]);
                 let scale = (s1 * s2).sqrt();
-                if !(scale > 1e-9) {
+                if scale.is_nan() || scale <= 1e-9 {
                     *x = [min, 0.0, 0.0, min, x[4], x[5]];
                     return;
                 }

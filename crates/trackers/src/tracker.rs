@@ -373,7 +373,7 @@ impl Tracker for ParticleTracker {
             ),
             aspect: (
                 (d.aspect_range[0] * e0).max(0.25),
-                (d.aspect_range[1] * e0).min(4.0).max(1.0),
+                (d.aspect_range[1] * e0).clamp(1.0, 4.0),
             ),
         };
         let sigmas = self.dynamics.settings.sigmas(space, &centre);
