@@ -988,17 +988,17 @@ impl Workspace {
                     .zip(z0);
                 for (t, (((((res, fxo), fyo), qio), valid), &z0)) in out.enumerate() {
                     let x = (sp.i0 + t) as f64;
-                    let qx = qx0 + bx1 * x;
-                    let qy = qy0 + by1 * x;
-                    if !(qx >= 0.0 && qy >= 0.0 && qx <= xmax && qy <= ymax) {
+                    let Some(Sample {
+                        ix,
+                        iy,
+                        fx,
+                        fy,
+                        i00,
+                    }) = Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1)
+                    else {
                         *valid = 0;
                         continue;
-                    }
-                    let ix = (qx as usize).min(w1 - 2);
-                    let iy = (qy as usize).min(h1 - 2);
-                    let fx = (qx - ix as f64) as f32;
-                    let fy = (qy - iy as f64) as f32;
-                    let i00 = iy * w1 + ix;
+                    };
                     // Bicubic values: bilinear interpolation error on fine texture would bias the
                     // estimate and inflate the residual scale.
                     let v = if ix >= 1 && iy >= 1 && ix + 2 < w1 && iy + 2 < h1 {
@@ -1044,17 +1044,12 @@ impl Workspace {
                 .zip(z0);
             for (t, ((((res, gxo), gyo), valid), &z0)) in out.enumerate() {
                 let x = (sp.i0 + t) as f64;
-                let qx = qx0 + bx1 * x;
-                let qy = qy0 + by1 * x;
-                if !(qx >= 0.0 && qy >= 0.0 && qx <= xmax && qy <= ymax) {
+                let Some(Sample { fx, fy, i00, .. }) =
+                    Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1)
+                else {
                     *valid = 0;
                     continue;
-                }
-                let ix = (qx as usize).min(w1 - 2);
-                let iy = (qy as usize).min(h1 - 2);
-                let fx = (qx - ix as f64) as f32;
-                let fy = (qy - iy as f64) as f32;
-                let i00 = iy * w1 + ix;
+                };
                 *res = bilinear(d1, i00, w1, fx, fy) - z0 - c;
                 *gxo = bilinear(&l1.gx, i00, w1, fx, fy);
                 *gyo = bilinear(&l1.gy, i00, w1, fx, fy);
@@ -1891,5 +1886,34 @@ mod tests {
         assert!(r.converged && (r.params[0] - 4.0).abs() < 0.01, "{r:?}");
         let f = r.inlier_fraction;
         assert!((1.0 - 12.0 / 128.0..=1.0 - 3.5 / 128.0).contains(&f), "{f}");
+    }
+}
+
+/// Where a warped position falls in the second frame: the top-left pixel of its 2×2 cell, the
+/// fractional offsets and the flat index; `None` outside [0, xmax] × [0, ymax].
+#[derive(Debug, Clone, Copy)]
+struct Sample {
+    ix: usize,
+    iy: usize,
+    fx: f32,
+    fy: f32,
+    i00: usize,
+}
+
+impl Sample {
+    #[inline(always)]
+    fn at(qx: f64, qy: f64, xmax: f64, ymax: f64, w1: usize, h1: usize) -> Option<Self> {
+        if !(qx >= 0.0 && qy >= 0.0 && qx <= xmax && qy <= ymax) {
+            return None;
+        }
+        let ix = (qx as usize).min(w1 - 2);
+        let iy = (qy as usize).min(h1 - 2);
+        Some(Self {
+            ix,
+            iy,
+            fx: (qx - ix as f64) as f32,
+            fy: (qy - iy as f64) as f32,
+            i00: iy * w1 + ix,
+        })
     }
 }
