@@ -115,6 +115,11 @@ pub struct ParticleTracker {
     clustering: Clustering,
     clusters: Vec<ClusterMotion>,
     previous: Vec<f32>,
+    /// Reused per frame: the hidden parts of the particles, as the estimators take them.
+    clutter_states: Vec<ClutterState>,
+    status_states: Vec<StatusState>,
+    /// Reused per frame: the mean previous state of each motion cluster.
+    prev_means: Vec<StateVector>,
     size: (usize, usize),
     frame: usize,
 }
@@ -153,6 +158,9 @@ impl ParticleTracker {
             clustering: Clustering::default(),
             clusters: Vec::new(),
             previous: Vec::new(),
+            clutter_states: Vec::new(),
+            status_states: Vec::new(),
+            prev_means: Vec::new(),
             size: (0, 0),
             frame: 0,
             config,
@@ -198,7 +206,9 @@ impl ParticleTracker {
             &mut self.clustering,
         );
         // The mean previous state of each cluster, for the fallback prediction.
-        let mut prev_means = vec![[0.0; STATE_SLOTS]; k];
+        let mut prev_means = std::mem::take(&mut self.prev_means);
+        prev_means.clear();
+        prev_means.resize(k, [0.0; STATE_SLOTS]);
         for p in set.states() {
             axpy(&mut prev_means[p.cluster as usize], 1.0, &p.prev);
         }
@@ -245,16 +255,18 @@ impl ParticleTracker {
             });
             self.clusters.push(motion);
         }
+        self.prev_means = prev_means;
         Ok((k, failures))
     }
 
-    fn estimate(&self, set: &ParticleSet<Particle>) -> Result<PosteriorSummary> {
+    fn estimate(&mut self, set: &ParticleSet<Particle>) -> Result<PosteriorSummary> {
         let weights = set.weights();
         let states = set.states();
         let clutter = match &self.dynamics.clutter {
             ClutterProcess::Switching(hmm) => {
-                let cs: Vec<ClutterState> = states.iter().map(|p| p.clutter).collect();
-                Some(hmm.estimate(&cs, weights)?)
+                self.clutter_states.clear();
+                self.clutter_states.extend(states.iter().map(|p| p.clutter));
+                Some(hmm.estimate(&self.clutter_states, weights)?)
             }
             ClutterProcess::Fixed(_) => None,
         };
@@ -271,8 +283,9 @@ impl ParticleTracker {
                 None,
             ),
             OcclusionModel::Status(hmm) => {
-                let ss: Vec<StatusState> = states.iter().map(|p| p.status).collect();
-                let e = hmm.estimate(&ss, weights)?;
+                self.status_states.clear();
+                self.status_states.extend(states.iter().map(|p| p.status));
+                let e = hmm.estimate(&self.status_states, weights)?;
                 (Some(e.gamma_hat), Some(e))
             }
         };

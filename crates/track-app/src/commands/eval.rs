@@ -63,15 +63,9 @@ pub enum Evaluation {
     /// occlusion scenes.
     #[command(after_help = "Example:\n  track eval switching --out results/")]
     Switching {
-        /// Trackers (repeatable; default w-hmm, w-occ, w-eval, full).
-        #[arg(long = "tracker")]
-        trackers: Vec<String>,
-        /// Particles.
-        #[arg(long, default_value_t = DEFAULT_PARTICLES)]
-        particles: usize,
-        /// Tracker seed.
-        #[arg(long, default_value_t = DEFAULT_SEED)]
-        seed: u64,
+        /// Trackers (default w-hmm, w-occ, w-eval, full), particles and seed.
+        #[command(flatten)]
+        run: TrackerRuns,
         /// Frames of each scene (default: the scenario's length).
         #[arg(long)]
         frames: Option<usize>,
@@ -88,15 +82,9 @@ pub enum Evaluation {
         /// OTB folders.
         #[arg(required = true)]
         sequences: Vec<PathBuf>,
-        /// Trackers (repeatable; default full).
-        #[arg(long = "tracker")]
-        trackers: Vec<String>,
-        /// Particles.
-        #[arg(long, default_value_t = DEFAULT_PARTICLES)]
-        particles: usize,
-        /// Tracker seed.
-        #[arg(long, default_value_t = DEFAULT_SEED)]
-        seed: u64,
+        /// Trackers (default full), particles and seed.
+        #[command(flatten)]
+        run: TrackerRuns,
         /// Edge threshold of the measurement lines, grey levels per pixel (default: the
         /// preset's, 8); see `track run --help`.
         #[arg(long)]
@@ -108,6 +96,20 @@ pub enum Evaluation {
         #[arg(long)]
         quiet: bool,
     },
+}
+
+/// Which trackers an evaluation runs, with how many particles and which seed.
+#[derive(Debug, clap::Args)]
+pub struct TrackerRuns {
+    /// A tracker preset (repeatable; the default depends on the evaluation).
+    #[arg(long = "tracker")]
+    pub trackers: Vec<String>,
+    /// Particles.
+    #[arg(long, default_value_t = DEFAULT_PARTICLES)]
+    pub particles: usize,
+    /// Tracker seed.
+    #[arg(long, default_value_t = DEFAULT_SEED)]
+    pub seed: u64,
 }
 
 /// The synthetic scenarios, for the command line.
@@ -200,13 +202,12 @@ pub fn run(args: &Args) -> Result<()> {
             println!("{md}");
             Ok(())
         }
-        Evaluation::Switching {
-            trackers,
-            particles,
-            seed,
-            frames,
-            out,
-        } => {
+        Evaluation::Switching { run, frames, out } => {
+            let TrackerRuns {
+                trackers,
+                particles,
+                seed,
+            } = run;
             positive("--particles", *particles)?;
             let trackers = presets(
                 trackers,
@@ -228,13 +229,16 @@ pub fn run(args: &Args) -> Result<()> {
         }
         Evaluation::Otb {
             sequences,
-            trackers,
-            particles,
-            seed,
+            run,
             edge_threshold,
             out,
             quiet,
         } => {
+            let TrackerRuns {
+                trackers,
+                particles,
+                seed,
+            } = run;
             let trackers = presets(trackers, &[Preset::Full])?;
             let mut rows: Vec<(String, String, SequenceMetrics)> = Vec::new();
             for t in &trackers {
