@@ -226,6 +226,8 @@ pub struct Workspace {
     /// Integer sample positions of the listed pixels, for the covariance grids.
     pos: Vec<(u32, u32)>,
     u: Vec<[f32; 8]>,
+    /// 0: the sample fell outside the second frame; otherwise valid (at full resolution, 2 where
+    /// it was interpolated bicubically and 1 on the bilinear border).
     valid: Vec<u8>,
     scratch: Vec<f32>,
     /// Runs of consecutive region pixels on one row, from `collect`.
@@ -991,39 +993,51 @@ impl Workspace {
                 let r = sp.k0..sp.k0 + sp.len;
                 let first = self.idx[sp.k0] as usize;
                 let z0 = &d0[first..first + sp.len];
-                let out = self.res[r.clone()]
+                // Pass 1: where each sample falls (kept: the covariance reads it), and which taps
+                // it uses: `valid` is 2 for the bicubic interior, 1 for the bilinear border.
+                let pos = self.fx[r.clone()]
                     .iter_mut()
-                    .zip(&mut self.fx[r.clone()])
                     .zip(&mut self.fy[r.clone()])
                     .zip(&mut self.qi[r.clone()])
-                    .zip(&mut self.valid[r.clone()])
-                    .zip(z0);
-                for (t, (((((res, fxo), fyo), qio), valid), &z0)) in out.enumerate() {
+                    .zip(&mut self.valid[r.clone()]);
+                for (t, (((fxo, fyo), qio), valid)) in pos.enumerate() {
                     let x = (sp.i0 + t) as f64;
-                    let Some(Sample {
-                        ix,
-                        iy,
-                        fx,
-                        fy,
-                        i00,
-                    }) = Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1)
-                    else {
-                        *valid = 0;
-                        continue;
+                    *valid = match Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1) {
+                        Some(Sample {
+                            ix,
+                            iy,
+                            fx,
+                            fy,
+                            i00,
+                        }) => {
+                            (*fxo, *fyo, *qio) = (fx, fy, i00 as u32);
+                            if ix >= 1 && iy >= 1 && ix + 2 < w1 && iy + 2 < h1 {
+                                2
+                            } else {
+                                1
+                            }
+                        }
+                        None => 0,
                     };
-                    // Bicubic values: bilinear interpolation error on fine texture would bias the
-                    // estimate and inflate the residual scale.
-                    let v = if ix >= 1 && iy >= 1 && ix + 2 < w1 && iy + 2 < h1 {
-                        bicubic(d1, i00, w1, fx, fy)
-                    } else {
-                        bilinear(d1, i00, w1, fx, fy)
+                }
+                // Pass 2: the values. Bicubic: bilinear interpolation error on fine texture would
+                // bias the estimate and inflate the residual scale. (Two short loops keep the
+                // interpolation's operands in registers; one long loop spilled them.)
+                let vals = self.res[r.clone()]
+                    .iter_mut()
+                    .zip(&self.fx[r.clone()])
+                    .zip(&self.fy[r.clone()])
+                    .zip(&self.qi[r.clone()])
+                    .zip(&self.valid[r.clone()])
+                    .zip(z0);
+                for (((((res, &fx), &fy), &qi), &valid), &z0) in vals {
+                    let i00 = qi as usize;
+                    let v = match valid {
+                        0 => continue,
+                        2 => bicubic(d1, i00, w1, fx, fy),
+                        _ => bilinear(d1, i00, w1, fx, fy),
                     };
                     *res = v - z0 - c;
-                    // Where the sample came from sets the interpolated noise (see `covariance`).
-                    *fxo = fx;
-                    *fyo = fy;
-                    *qio = i00 as u32;
-                    *valid = 1;
                     n_valid += 1;
                 }
                 let (g0x, g0y) = (&l0.gx[first..first + sp.len], &l0.gy[first..first + sp.len]);
