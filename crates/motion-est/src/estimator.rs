@@ -29,7 +29,7 @@ use crate::image::ImageView;
 use crate::model::{ModelSpec, MotionModel};
 use crate::pyramid::{KERNEL, Level, Pyramid, Window};
 use crate::region::{PixelBox, Region};
-use crate::robust::{RobustFunction, robust_scale, robust_scale_from};
+use crate::robust::{RobustFunction, robust_scale_from};
 use crate::{Error, Result};
 
 type Mat7 = SMatrix<f64, 7, 7>;
@@ -594,7 +594,13 @@ impl MotionEstimator {
         let s = if converged && last_step <= REUSE_STEP {
             last_scale
         } else {
-            let count = ws.collect(l0, 0, region, bbox);
+            // After a converged level 0 the workspace still lists its pixels, and the last
+            // iteration's scale, taken one step away, seeds the refinement at Θ̂.
+            let count = if converged {
+                ws.idx.len()
+            } else {
+                ws.collect(l0, 0, region, bbox)
+            };
             let n_valid = ws.evaluate(l0, l1, spec, &theta, origin, true);
             if n_valid < n + 1 {
                 return Err(Error::RegionTooSmall {
@@ -602,7 +608,8 @@ impl MotionEstimator {
                     needed: n + 1,
                 });
             }
-            robust_scale(&ws.res, &ws.valid, &mut ws.scratch, st.min_scale)
+            let seed = converged.then_some(last_scale);
+            robust_scale_from(&ws.res, &ws.valid, &mut ws.scratch, st.min_scale, seed)
         };
         let cov = ws.covariance(spec, st.robust, self.moments, s, origin, st.presmooth, l1)?;
         if let Some(index) = theta.iter().position(|v| !v.is_finite()) {

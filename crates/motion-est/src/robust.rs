@@ -137,18 +137,10 @@ impl RobustFunction {
 /// subsample of at most ~2k values: it only seeds the refinement), then refined by up to six passes
 /// of the Gaussian-consistent RMS of the residuals within 2.5 scales (the MAD alone is inflated by a
 /// large outlier fraction: 39 % outliers almost double it). Never below `min_scale`.
-pub(crate) fn robust_scale(
-    res: &[f32],
-    valid: &[u8],
-    scratch: &mut Vec<f32>,
-    min_scale: f64,
-) -> f64 {
-    robust_scale_from(res, valid, scratch, min_scale, None)
-}
-
-/// As [`robust_scale`], but with `seed` (the previous iteration's scale at the same level, whose
-/// residuals differ little) the median is skipped and the refinement starts from the seed: the
-/// refinement has the same fixed point and needs one or two passes from there.
+///
+/// With `seed` (a scale from residuals that differ little, e.g. the previous iteration's at the
+/// same level) the median is skipped and the refinement starts from the seed: the refinement has
+/// the same fixed point and needs one or two passes from there.
 pub(crate) fn robust_scale_from(
     res: &[f32],
     valid: &[u8],
@@ -223,6 +215,12 @@ fn truncated_sum(res: &[f32], valid: &[u8], t: f32) -> (f64, usize) {
         n += counts.iter().map(|&c| c as usize).sum::<usize>();
     }
     (sum, n)
+}
+
+/// [`robust_scale_from`] without a seed.
+#[cfg(test)]
+fn robust_scale(res: &[f32], valid: &[u8], scratch: &mut Vec<f32>, min_scale: f64) -> f64 {
+    robust_scale_from(res, valid, scratch, min_scale, None)
 }
 
 #[cfg(test)]
