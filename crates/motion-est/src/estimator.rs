@@ -1158,6 +1158,15 @@ impl Workspace {
         second: bool,
         weights: F,
     ) -> (Mat7, Vec7, Mat7) {
+        match (spec.model, spec.offset) {
+            (MotionModel::Affine, false) => {
+                return self.normal_equations_affine::<4, _>(spec, s, o, second, weights);
+            }
+            (MotionModel::Affine, true) => {
+                return self.normal_equations_affine::<5, _>(spec, s, o, second, weights);
+            }
+            _ => {}
+        }
         match spec.len() {
             2 => self.normal_equations_spans::<2, _>(spec, s, o, second, weights),
             3 => self.normal_equations_spans::<3, _>(spec, s, o, second, weights),
@@ -1253,6 +1262,89 @@ impl Workspace {
                 hm[(bb, a)] = h[a][bb];
                 hpm[(a, bb)] = hp[a][bb];
                 hpm[(bb, a)] = hp[a][bb];
+            }
+        }
+        (hm, bv, hpm)
+    }
+
+    /// [`normal_equations_spans`](Self::normal_equations_spans) for the affine model, with half
+    /// the lane work: along a span y is constant, so each Jacobian entry is one of the per-pixel
+    /// values p = (gx, gx·x, gy, gy·x[, −1]) times 1 or y. The lanes accumulate Σ w p pᵀ, Σ w₂ p pᵀ
+    /// and Σ w p r over a span (`P` = 4, or 5 with the offset), and the span is folded into H, H₂
+    /// and g with the factors y^(i+j).
+    fn normal_equations_affine<const P: usize, F: Fn(f32, f32) -> (f32, f32)>(
+        &self,
+        spec: ModelSpec,
+        s: f64,
+        o: [f64; 2],
+        with_psi: bool,
+        weights: F,
+    ) -> (Mat7, Vec7, Mat7) {
+        // Parameter a of Eq. 13 (and the offset) is p[SOURCE[a]] · y^POWER[a].
+        const SOURCE: [usize; 7] = [0, 1, 0, 2, 3, 2, 4];
+        const POWER: [i32; 7] = [0, 0, 1, 0, 0, 1, 0];
+        let n = spec.len();
+        let mut acc = Lanes::<P>::default();
+        let mut hm = Mat7::zeros();
+        let mut hpm = Mat7::zeros();
+        let mut bv = Vec7::zeros();
+        let inv_s = (1.0 / s) as f32;
+        for sp in &self.spans {
+            let y = sp.j as f64 - o[1];
+            let x_first = (sp.i0 as f64 - o[0]) as f32;
+            let mut t = 0;
+            let mut groups = 0usize;
+            let (mut h, mut hp, mut b) = ([[0.0f64; P]; P], [[0.0f64; P]; P], [0.0f64; P]);
+            while t < sp.len {
+                let cnt = (sp.len - t).min(8);
+                let k = sp.k0 + t;
+                let (mut rl, mut gxl, mut gyl, mut ml) =
+                    ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
+                for l in 0..cnt {
+                    // Invalid pixels get zero weight and zero values (theirs may be stale).
+                    if self.valid[k + l] != 0 {
+                        rl[l] = self.res[k + l];
+                        gxl[l] = self.gx[k + l];
+                        gyl[l] = self.gy[k + l];
+                        ml[l] = self.m[k + l];
+                    }
+                }
+                let (mut wl, mut wpl) = ([0.0f32; 8], [0.0f32; 8]);
+                for l in 0..8 {
+                    (wl[l], wpl[l]) = weights(rl[l] * inv_s, ml[l]);
+                }
+                let xl: [f32; 8] = std::array::from_fn(|l| x_first + (t + l) as f32);
+                let mut p5 = [[-1.0f32; 8]; 5];
+                p5[0] = gxl;
+                p5[1] = std::array::from_fn(|l| gxl[l] * xl[l]);
+                p5[2] = gyl;
+                p5[3] = std::array::from_fn(|l| gyl[l] * xl[l]);
+                let pl: [[f32; 8]; P] = std::array::from_fn(|a| p5[a]);
+                acc.add(&pl, &wl, &wpl, &rl, with_psi);
+                groups += 1;
+                if groups == 64 {
+                    acc.flush(&mut h, &mut hp, &mut b);
+                    groups = 0;
+                }
+                t += 8;
+            }
+            acc.flush(&mut h, &mut hp, &mut b);
+            for a in 0..n {
+                let (ia, pa) = (SOURCE[a], POWER[a]);
+                bv[a] += b[ia] * y.powi(pa);
+                for c in a..n {
+                    let (ic, pc) = (SOURCE[c], POWER[c]);
+                    let (i, j) = (ia.min(ic), ia.max(ic));
+                    let f = y.powi(pa + pc);
+                    hm[(a, c)] += h[i][j] * f;
+                    hpm[(a, c)] += hp[i][j] * f;
+                }
+            }
+        }
+        for a in 0..n {
+            for c in a + 1..n {
+                hm[(c, a)] = hm[(a, c)];
+                hpm[(c, a)] = hpm[(a, c)];
             }
         }
         (hm, bv, hpm)
