@@ -1631,8 +1631,7 @@ fn convolve_zero(data: &mut [f32], w: usize, h: usize, tmp: &mut Vec<f32>) {
         acc
     };
     let (lo, hi) = (w.min(2), w.saturating_sub(2).max(w.min(2)));
-    // Horizontal pass into tmp.
-    tmp.clear();
+    // Horizontal pass into tmp (every cell is written: no need to clear it).
     tmp.resize(w * h, 0.0);
     for (row, out) in data.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
         if w >= 5 {
