@@ -134,7 +134,7 @@ impl RobustFunction {
 }
 
 /// Robust scale of residuals `res` where `valid` is set: 1.4826 · median |r| (on a strided
-/// subsample of at most ~2k values: it only seeds the refinement), then refined by up to six passes
+/// subsample of at most ~1k values: it only seeds the refinement), then refined by up to six passes
 /// of the Gaussian-consistent RMS of the residuals within 2.5 scales (the MAD alone is inflated by a
 /// large outlier fraction: 39 % outliers almost double it). Never below `min_scale`.
 ///
@@ -153,7 +153,7 @@ pub(crate) fn robust_scale_from(
         _ => {
             scratch.clear();
             let n_valid = valid.iter().filter(|&&v| v != 0).count();
-            let stride = (n_valid / 2048).max(1);
+            let stride = (n_valid / 512).max(1);
             let mut seen = 0usize;
             for (&r, &v) in res.iter().zip(valid) {
                 if v != 0 {
