@@ -9,8 +9,8 @@
 //!   particle's γ (Wu Eq. 1–6, 11–12; γ = 0 is the plain Eq. 6).
 
 use contour_obs::{
-    GreyView, MeasurementLines, OcclusionLikelihood, OdobezLikelihood, OdobezSettings, Template,
-    WuSettings,
+    GreyView, LineTerms, MeasurementLines, OcclusionLikelihood, OdobezLikelihood, OdobezSettings,
+    Template, WuSettings, occlusion_line_log,
 };
 use motion_est::{ImageView, NccSettings};
 use serde::{Deserialize, Serialize};
@@ -69,6 +69,18 @@ pub struct LikelihoodSettings {
     /// density comparable with λ̄.
     #[serde(default = "one")]
     pub clutter_line_fraction: f64,
+    /// The share s of an occluded line's edge count that comes from an occluding surface of
+    /// unknown texture, in [0, 1] (default 0: Wu Eq. 12 as printed). Wu's clutter-only term
+    /// p(Z_i | C) = N(m(L); λ)/W explains the edges seen on a hidden line as background clutter
+    /// of density λ; but those edges belong to the occluder, whose texture need not look like
+    /// the background at all. With s > 0 the count of an occluded line is (1 − s) N(m; λ) +
+    /// s U(m; 0..=L), the uniform being the least committal law of a count on a line of L pixels.
+    /// Without it, an edge-rich occluder (the `occlusion` scene's: several edges per line, more
+    /// than any of Wu's learnt classes explains) makes every hypothesis hidden behind it
+    /// improbable, so the occluded hypotheses are pushed off the occluder — away from where the
+    /// target is.
+    #[serde(default)]
+    pub unknown_occluder_share: f64,
 }
 
 fn one() -> f64 {
@@ -83,6 +95,7 @@ impl Default for LikelihoodSettings {
             motion_consistency: false,
             clutter: None,
             clutter_line_fraction: 1.0,
+            unknown_occluder_share: 0.0,
         }
     }
 }
@@ -104,6 +117,13 @@ impl LikelihoodSettings {
         }
         if let Some(w) = &self.clutter {
             w.validate()?;
+        }
+        let s = self.unknown_occluder_share;
+        if !(0.0..=1.0).contains(&s) {
+            return Err(Error::InvalidSetting {
+                name: "likelihood.unknown_occluder_share",
+                reason: format!("{s} must be in [0, 1]"),
+            });
         }
         let f = self.clutter_line_fraction;
         if !(f > 0.0 && f <= 1.0) {
@@ -146,6 +166,7 @@ pub struct LikelihoodModel {
     motion_consistency: bool,
     clutter: Option<OcclusionLikelihood>,
     clutter_line_fraction: f64,
+    unknown_occluder_share: f64,
 }
 
 impl LikelihoodModel {
@@ -175,7 +196,42 @@ impl LikelihoodModel {
                 .map(|w| OcclusionLikelihood::new(w, &template))
                 .transpose()?,
             clutter_line_fraction: settings.clutter_line_fraction,
+            unknown_occluder_share: settings.unknown_occluder_share,
         })
+    }
+
+    /// Wu's occlusion likelihood (Eq. 11) with the occluded lines' edge count a mixture of
+    /// background clutter and an unknown occluder (see
+    /// [`LikelihoodSettings::unknown_occluder_share`]), from the per-line terms.
+    fn log_occlusion_with_unknown_occluder(
+        &self,
+        clutter: &OcclusionLikelihood,
+        ws: &mut MeasurementLines,
+        image: &GreyView<'_>,
+        pose: &contour_obs::Affine2,
+        lambda: f64,
+        gamma: f64,
+        terms: &mut Vec<LineTerms>,
+    ) -> contour_obs::Result<f64> {
+        let wu = clutter.wu();
+        terms.resize(wu.contour().len(), LineTerms::default());
+        wu.line_terms(ws, image, pose, lambda, terms)?;
+        let s = self.unknown_occluder_share;
+        let length = wu.settings().lines.length as f64;
+        let ln_window = wu.settings().window.ln();
+        Ok(terms
+            .iter()
+            .map(|t| {
+                // t.log_clutter = ln N(m; λ) − ln W; the uniform count law is 1/(L + 1).
+                let ln_poisson = t.log_clutter + ln_window;
+                let ln_count = ((1.0 - s) * ln_poisson.exp() + s / (length + 1.0)).ln();
+                let terms = LineTerms {
+                    log_target: t.log_target,
+                    log_clutter: ln_count - ln_window,
+                };
+                occlusion_line_log(terms, gamma)
+            })
+            .sum())
     }
 
     /// Whether a term needs motion estimates.
@@ -201,6 +257,7 @@ struct Scratch {
     clutter_lines: Option<MeasurementLines>,
     patch_now: Vec<f32>,
     patch_prev: Vec<f32>,
+    line_terms: Vec<LineTerms>,
 }
 
 /// The likelihood of one frame, ready for the particle filter.
@@ -224,6 +281,7 @@ impl FrameObservation<'_> {
             clutter_lines: m.clutter.as_ref().and_then(|c| c.workspace().ok()),
             patch_now: vec![0.0; m.implicit.as_ref().map_or(0, |(_, g)| g.len())],
             patch_prev: vec![0.0; m.implicit.as_ref().map_or(0, |(_, g)| g.len())],
+            line_terms: Vec::new(),
         }
     }
 
@@ -241,7 +299,20 @@ impl FrameObservation<'_> {
         }
         if let (Some(clutter), Some(ws)) = (&m.clutter, scratch.clutter_lines.as_mut()) {
             let lambda = m.clutter_line_fraction * p.clutter.lambda;
-            match clutter.log_likelihood(ws, &self.current, &pose, lambda, p.gamma()) {
+            let value = if m.unknown_occluder_share > 0.0 {
+                m.log_occlusion_with_unknown_occluder(
+                    clutter,
+                    ws,
+                    &self.current,
+                    &pose,
+                    lambda,
+                    p.gamma(),
+                    &mut scratch.line_terms,
+                )
+            } else {
+                clutter.log_likelihood(ws, &self.current, &pose, lambda, p.gamma())
+            };
+            match value {
                 Ok(v) => total += v,
                 Err(_) => return f64::NEG_INFINITY,
             }
