@@ -200,26 +200,20 @@ impl LikelihoodModel {
         })
     }
 
-    /// Wu's occlusion likelihood (Eq. 11) with the occluded lines' edge count a mixture of
-    /// background clutter and an unknown occluder (see
-    /// [`LikelihoodSettings::unknown_occluder_share`]), from the per-line terms.
+    /// Wu's occlusion likelihood (Eq. 11) at occlusion `gamma` from the per-line terms `terms`
+    /// of [`contour_obs::WuLikelihood::line_terms`], with the occluded lines' edge count a mixture
+    /// of background clutter and an unknown occluder (see
+    /// [`LikelihoodSettings::unknown_occluder_share`]).
     fn log_occlusion_with_unknown_occluder(
         &self,
-        clutter: &OcclusionLikelihood,
-        ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
-        pose: &contour_obs::Affine2,
-        lambda: f64,
+        settings: &WuSettings,
+        terms: &[LineTerms],
         gamma: f64,
-        terms: &mut Vec<LineTerms>,
-    ) -> contour_obs::Result<f64> {
-        let wu = clutter.wu();
-        terms.resize(wu.contour().len(), LineTerms::default());
-        wu.line_terms(ws, image, pose, lambda, terms)?;
+    ) -> f64 {
         let s = self.unknown_occluder_share;
-        let length = wu.settings().lines.length as f64;
-        let ln_window = wu.settings().window.ln();
-        Ok(terms
+        let length = settings.lines.length as f64;
+        let ln_window = settings.window.ln();
+        terms
             .iter()
             .map(|t| {
                 // t.log_clutter = ln N(m; λ) − ln W; the uniform count law is 1/(L + 1).
@@ -231,7 +225,7 @@ impl LikelihoodModel {
                 };
                 occlusion_line_log(terms, gamma)
             })
-            .sum())
+            .sum()
     }
 
     /// Whether a term needs motion estimates.
@@ -300,15 +294,13 @@ impl FrameObservation<'_> {
         if let (Some(clutter), Some(ws)) = (&m.clutter, scratch.clutter_lines.as_mut()) {
             let lambda = m.clutter_line_fraction * p.clutter.lambda;
             let value = if m.unknown_occluder_share > 0.0 {
-                m.log_occlusion_with_unknown_occluder(
-                    clutter,
-                    ws,
-                    &self.current,
-                    &pose,
-                    lambda,
-                    p.gamma(),
-                    &mut scratch.line_terms,
-                )
+                let wu = clutter.wu();
+                let terms = &mut scratch.line_terms;
+                terms.resize(wu.contour().len(), LineTerms::default());
+                wu.line_terms(ws, &self.current, &pose, lambda, terms)
+                    .map(|()| {
+                        m.log_occlusion_with_unknown_occluder(wu.settings(), terms, p.gamma())
+                    })
             } else {
                 clutter.log_likelihood(ws, &self.current, &pose, lambda, p.gamma())
             };
@@ -378,5 +370,53 @@ impl smc_core::Observation for FrameObservation<'_> {
         for (s, o) in states.iter().zip(out.iter_mut()) {
             *o = self.evaluate(s, &mut scratch);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model(share: f64) -> LikelihoodModel {
+        let settings = LikelihoodSettings {
+            clutter: Some(WuSettings::default()),
+            unknown_occluder_share: share,
+            ..LikelihoodSettings::default()
+        };
+        LikelihoodModel::new(ShapeSpace::Affine, &settings).unwrap()
+    }
+
+    #[test]
+    fn unknown_occluder_mixture_reduces_to_wu_and_to_the_uniform_count() {
+        let w = WuSettings::default();
+        // Two lines: 3 edges (one in the window) and none, at λ = 0.05 per pixel.
+        let terms = [
+            contour_obs::wu_line_terms(&[-7.5, 1.0, 9.0], 20.0, 0.05, &w).unwrap(),
+            contour_obs::wu_line_terms(&[], 20.0, 0.05, &w).unwrap(),
+        ];
+        for gamma in [0.0, 0.3, 1.0] {
+            // Share 0 is Wu's Eq. 11 exactly.
+            let wu: f64 = terms.iter().map(|t| occlusion_line_log(*t, gamma)).sum();
+            let got = model(0.0).log_occlusion_with_unknown_occluder(&w, &terms, gamma);
+            assert!((got - wu).abs() < 1e-12, "γ {gamma}: {got} vs {wu}");
+        }
+        // Share 1 at γ = 1: every line is 1/(L + 1) · 1/W, whatever its edges.
+        let got = model(1.0).log_occlusion_with_unknown_occluder(&w, &terms, 1.0);
+        let want = 2.0 * (-(21.0f64).ln() - w.window.ln());
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+        // The target term (γ = 0) never depends on the share.
+        let a = model(0.0).log_occlusion_with_unknown_occluder(&w, &terms, 0.0);
+        let b = model(0.5).log_occlusion_with_unknown_occluder(&w, &terms, 0.0);
+        assert!((a - b).abs() < 1e-12);
+    }
+
+    #[test]
+    fn share_outside_the_unit_interval_is_rejected() {
+        let settings = LikelihoodSettings {
+            clutter: Some(WuSettings::default()),
+            unknown_occluder_share: 1.5,
+            ..LikelihoodSettings::default()
+        };
+        assert!(settings.validate().is_err());
     }
 }
