@@ -34,9 +34,23 @@ fn main() {
     let frames: Vec<_> = (0..scene.len())
         .map(|k| scene.render_frame(k).unwrap())
         .collect();
+    if let Some(k) = env("LAND") {
+        let (img, truth) = &frames[k as usize];
+        let d = scene_synth::to_f32(img);
+        landscape(img.width() as usize, img.height() as usize, &d, truth);
+        return;
+    }
     let mut total = 0.0;
     let mut fails = 0;
     let mut ms = 0.0;
+    let mut post_total = 0.0;
+    // Frames after the last (almost) fully hidden one where the target is visible again: the
+    // reacquisition window of the occlusion scene (empty on the other scenes).
+    let vis: Vec<f64> = frames.iter().map(|(_, t)| t.visible_fraction).collect();
+    let post: Vec<usize> = match vis.iter().rposition(|&v| v < 0.1) {
+        Some(last) => (last..vis.len()).filter(|&k| vis[k] > 0.8).collect(),
+        None => Vec::new(),
+    };
     for seed in 1..=seeds {
         let mut c = preset.config(n, seed);
         if let Some(v) = env("RHO") {
@@ -79,6 +93,12 @@ fn main() {
         if let (Some(v), Some(w)) = (env("PD"), c.likelihood.clutter.as_mut()) {
             w.p_detect = v;
         }
+        if let Some(v) = env("UO") {
+            c.likelihood.unknown_occluder_share = v;
+        }
+        if std::env::var("OA1").is_ok() {
+            c.motion.occlusion_aware = true;
+        }
         if std::env::var("OA0").is_ok() {
             c.motion.occlusion_aware = false;
         }
@@ -117,24 +137,90 @@ fn main() {
             let inter = ix.max(0.0) * iy.max(0.0);
             let iou = inter / (b[2] * b[3] + g.w * g.h - inter);
             ious.push(iou);
+            if std::env::var("TRACE").is_ok() {
+                println!(
+                    "{k:3} ab ({:4.1},{:4.1}) truth ({:6.1},{:6.1}) vis {:.2} est ({:6.1},{:6.1}) iou {iou:.2} γ {:.2} α {:?} β {:?} ess {:.0}",
+                    est.ellipse.a,
+                    est.ellipse.b,
+                    e.cx,
+                    e.cy,
+                    truth.visible_fraction,
+                    est.ellipse.cx,
+                    est.ellipse.cy,
+                    est.gamma.unwrap_or(f64::NAN),
+                    est.status.as_ref().map(|s| s.alpha_hat),
+                    est.clutter.as_ref().map(|c| c.beta_hat),
+                    est.ess
+                );
+            }
         }
         let mean: f64 = ious.iter().sum::<f64>() / ious.len() as f64;
+        let post_mean = post.iter().map(|&k| ious[k]).sum::<f64>() / post.len().max(1) as f64;
+        post_total += post_mean;
         let fail = ious.windows(5).position(|w| w.iter().all(|&v| v < 0.2));
         if fail.is_some() {
             fails += 1;
         }
         total += mean;
         if std::env::var("V").is_ok() {
-            println!("seed {seed}: mean IoU {mean:.3} fail {fail:?}");
+            println!(
+                "seed {seed}: mean IoU {mean:.3} after occlusion {post_mean:.3} fail {fail:?}"
+            );
         }
     }
     println!(
-        "{} {}: mean IoU {:.3}, failures {}/{}, {:.2} ms/frame",
+        "{} {}: mean IoU {:.3} (after occlusion {:.3}), failures {}/{}, {:.2} ms/frame",
         args[1],
         args[2],
         total / seeds as f64,
+        post_total / seeds as f64,
         fails,
         seeds,
         ms / (seeds as f64 * frames.len() as f64)
     );
+}
+
+/// Prints Wu's log-likelihood (λ = medium, line fraction 0.5) of the true contour shifted
+/// horizontally and scaled, for a few γ: where the likelihood pulls a partly hidden contour.
+fn landscape(w: usize, h: usize, d: &[f32], truth: &scene_synth::FrameTruth) {
+    use contour_obs::{OcclusionLikelihood, Template, WuSettings};
+    let view = contour_obs::GreyView::new(w, h, d).unwrap();
+    let settings = WuSettings {
+        window: env("WIN").unwrap_or(8.0),
+        ..WuSettings::default()
+    };
+    let lik = OcclusionLikelihood::new(settings, &Template::UnitCircle).unwrap();
+    let mut ws = lik.workspace().unwrap();
+    let e = truth.ellipse;
+    for scale in [1.0, 1.15] {
+        for dx in (-16..=16).step_by(2) {
+            let el = Ellipse {
+                cx: e.cx + dx as f64,
+                cy: e.cy,
+                a: e.a * scale,
+                b: e.b * scale,
+                theta: e.angle,
+            };
+            let x = trackers::ShapeSpace::Affine.from_ellipse(&el);
+            let pose = trackers::ShapeSpace::Affine.pose(&x);
+            let vals: Vec<String> = [0.0, 0.3, 0.7, 1.0]
+                .iter()
+                .map(|&g| {
+                    let v = lik
+                        .log_likelihood(&mut ws, &view, &pose, 0.0412, g)
+                        .unwrap();
+                    let bg: f64 = (0..ws.len())
+                        .map(|i| {
+                            let m = ws.edges(i).len();
+                            let mu = 0.0412 * ws.observed_length(i);
+                            m as f64 * mu.ln() - mu - (1..=m).map(|j| (j as f64).ln()).sum::<f64>()
+                        })
+                        .sum();
+                    format!("{v:7.2} [{:6.2}]", v - bg)
+                })
+                .collect();
+            let edges: usize = (0..ws.len()).map(|i| ws.edges(i).len()).sum();
+            println!("s {scale} dx {dx:3}: {} edges {edges}", vals.join(" "));
+        }
+    }
 }

@@ -9,8 +9,8 @@
 //!   particle's γ (Wu Eq. 1–6, 11–12; γ = 0 is the plain Eq. 6).
 
 use contour_obs::{
-    GreyView, MeasurementLines, OcclusionLikelihood, OdobezLikelihood, OdobezSettings, Template,
-    WuSettings,
+    GreyView, LineTerms, MeasurementLines, OcclusionLikelihood, OdobezLikelihood, OdobezSettings,
+    Template, WuSettings, occlusion_line_log,
 };
 use motion_est::{ImageView, NccSettings};
 use serde::{Deserialize, Serialize};
@@ -69,6 +69,18 @@ pub struct LikelihoodSettings {
     /// density comparable with λ̄.
     #[serde(default = "one")]
     pub clutter_line_fraction: f64,
+    /// The share s of an occluded line's edge count that comes from an occluding surface of
+    /// unknown texture, in [0, 1] (default 0: Wu Eq. 12 as printed). Wu's clutter-only term
+    /// p(Z_i | C) = N(m(L); λ)/W explains the edges seen on a hidden line as background clutter
+    /// of density λ; but those edges belong to the occluder, whose texture need not look like
+    /// the background at all. With s > 0 the count of an occluded line is (1 − s) N(m; λ) +
+    /// s U(m; 0..=L), the uniform being the least committal law of a count on a line of L pixels.
+    /// Without it, an edge-rich occluder (the `occlusion` scene's: several edges per line, more
+    /// than any of Wu's learnt classes explains) makes every hypothesis hidden behind it
+    /// improbable, so the occluded hypotheses are pushed off the occluder — away from where the
+    /// target is.
+    #[serde(default)]
+    pub unknown_occluder_share: f64,
 }
 
 fn one() -> f64 {
@@ -83,6 +95,7 @@ impl Default for LikelihoodSettings {
             motion_consistency: false,
             clutter: None,
             clutter_line_fraction: 1.0,
+            unknown_occluder_share: 0.0,
         }
     }
 }
@@ -104,6 +117,13 @@ impl LikelihoodSettings {
         }
         if let Some(w) = &self.clutter {
             w.validate()?;
+        }
+        let s = self.unknown_occluder_share;
+        if !(0.0..=1.0).contains(&s) {
+            return Err(Error::InvalidSetting {
+                name: "likelihood.unknown_occluder_share",
+                reason: format!("{s} must be in [0, 1]"),
+            });
         }
         let f = self.clutter_line_fraction;
         if !(f > 0.0 && f <= 1.0) {
@@ -146,6 +166,7 @@ pub struct LikelihoodModel {
     motion_consistency: bool,
     clutter: Option<OcclusionLikelihood>,
     clutter_line_fraction: f64,
+    unknown_occluder_share: f64,
 }
 
 impl LikelihoodModel {
@@ -175,7 +196,36 @@ impl LikelihoodModel {
                 .map(|w| OcclusionLikelihood::new(w, &template))
                 .transpose()?,
             clutter_line_fraction: settings.clutter_line_fraction,
+            unknown_occluder_share: settings.unknown_occluder_share,
         })
+    }
+
+    /// Wu's occlusion likelihood (Eq. 11) at occlusion `gamma` from the per-line terms `terms`
+    /// of [`contour_obs::WuLikelihood::line_terms`], with the occluded lines' edge count a mixture
+    /// of background clutter and an unknown occluder (see
+    /// [`LikelihoodSettings::unknown_occluder_share`]).
+    fn log_occlusion_with_unknown_occluder(
+        &self,
+        settings: &WuSettings,
+        terms: &[LineTerms],
+        gamma: f64,
+    ) -> f64 {
+        let s = self.unknown_occluder_share;
+        let length = settings.lines.length as f64;
+        let ln_window = settings.window.ln();
+        terms
+            .iter()
+            .map(|t| {
+                // t.log_clutter = ln N(m; λ) − ln W; the uniform count law is 1/(L + 1).
+                let ln_poisson = t.log_clutter + ln_window;
+                let ln_count = ((1.0 - s) * ln_poisson.exp() + s / (length + 1.0)).ln();
+                let terms = LineTerms {
+                    log_target: t.log_target,
+                    log_clutter: ln_count - ln_window,
+                };
+                occlusion_line_log(terms, gamma)
+            })
+            .sum()
     }
 
     /// Whether a term needs motion estimates.
@@ -201,6 +251,7 @@ struct Scratch {
     clutter_lines: Option<MeasurementLines>,
     patch_now: Vec<f32>,
     patch_prev: Vec<f32>,
+    line_terms: Vec<LineTerms>,
 }
 
 /// The likelihood of one frame, ready for the particle filter.
@@ -224,6 +275,7 @@ impl FrameObservation<'_> {
             clutter_lines: m.clutter.as_ref().and_then(|c| c.workspace().ok()),
             patch_now: vec![0.0; m.implicit.as_ref().map_or(0, |(_, g)| g.len())],
             patch_prev: vec![0.0; m.implicit.as_ref().map_or(0, |(_, g)| g.len())],
+            line_terms: Vec::new(),
         }
     }
 
@@ -241,7 +293,18 @@ impl FrameObservation<'_> {
         }
         if let (Some(clutter), Some(ws)) = (&m.clutter, scratch.clutter_lines.as_mut()) {
             let lambda = m.clutter_line_fraction * p.clutter.lambda;
-            match clutter.log_likelihood(ws, &self.current, &pose, lambda, p.gamma()) {
+            let value = if m.unknown_occluder_share > 0.0 {
+                let wu = clutter.wu();
+                let terms = &mut scratch.line_terms;
+                terms.resize(wu.contour().len(), LineTerms::default());
+                wu.line_terms(ws, &self.current, &pose, lambda, terms)
+                    .map(|()| {
+                        m.log_occlusion_with_unknown_occluder(wu.settings(), terms, p.gamma())
+                    })
+            } else {
+                clutter.log_likelihood(ws, &self.current, &pose, lambda, p.gamma())
+            };
+            match value {
                 Ok(v) => total += v,
                 Err(_) => return f64::NEG_INFINITY,
             }
@@ -307,5 +370,53 @@ impl smc_core::Observation for FrameObservation<'_> {
         for (s, o) in states.iter().zip(out.iter_mut()) {
             *o = self.evaluate(s, &mut scratch);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model(share: f64) -> LikelihoodModel {
+        let settings = LikelihoodSettings {
+            clutter: Some(WuSettings::default()),
+            unknown_occluder_share: share,
+            ..LikelihoodSettings::default()
+        };
+        LikelihoodModel::new(ShapeSpace::Affine, &settings).unwrap()
+    }
+
+    #[test]
+    fn unknown_occluder_mixture_reduces_to_wu_and_to_the_uniform_count() {
+        let w = WuSettings::default();
+        // Two lines: 3 edges (one in the window) and none, at λ = 0.05 per pixel.
+        let terms = [
+            contour_obs::wu_line_terms(&[-7.5, 1.0, 9.0], 20.0, 0.05, &w).unwrap(),
+            contour_obs::wu_line_terms(&[], 20.0, 0.05, &w).unwrap(),
+        ];
+        for gamma in [0.0, 0.3, 1.0] {
+            // Share 0 is Wu's Eq. 11 exactly.
+            let wu: f64 = terms.iter().map(|t| occlusion_line_log(*t, gamma)).sum();
+            let got = model(0.0).log_occlusion_with_unknown_occluder(&w, &terms, gamma);
+            assert!((got - wu).abs() < 1e-12, "γ {gamma}: {got} vs {wu}");
+        }
+        // Share 1 at γ = 1: every line is 1/(L + 1) · 1/W, whatever its edges.
+        let got = model(1.0).log_occlusion_with_unknown_occluder(&w, &terms, 1.0);
+        let want = 2.0 * (-(21.0f64).ln() - w.window.ln());
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+        // The target term (γ = 0) never depends on the share.
+        let a = model(0.0).log_occlusion_with_unknown_occluder(&w, &terms, 0.0);
+        let b = model(0.5).log_occlusion_with_unknown_occluder(&w, &terms, 0.0);
+        assert!((a - b).abs() < 1e-12);
+    }
+
+    #[test]
+    fn share_outside_the_unit_interval_is_rejected() {
+        let settings = LikelihoodSettings {
+            clutter: Some(WuSettings::default()),
+            unknown_occluder_share: 1.5,
+            ..LikelihoodSettings::default()
+        };
+        assert!(settings.validate().is_err());
     }
 }
