@@ -43,7 +43,7 @@ impl<'a> GreyView<'a> {
                 min: 2,
             });
         }
-        if let Some(index) = data.iter().position(|v| !v.is_finite()) {
+        if let Some(index) = first_non_finite(data) {
             return Err(Error::NonFinite {
                 what: "image pixel",
                 index,
@@ -179,6 +179,26 @@ impl GreyView<'_> {
 /// resolution, and room for coordinates up to 2³⁸ px in an i64.
 pub(crate) const FIX_BITS: u32 = 24;
 
+/// The index of the first NaN or infinite value. Blocks of 256 are first tested with an integer
+/// OR over "all exponent bits set" (a reduction the compiler vectorises), so the common
+/// all-finite frame costs one fast pass; only a bad block is searched element by element.
+fn first_non_finite(data: &[f32]) -> Option<usize> {
+    const EXPONENT: u32 = 0x7f80_0000;
+    data.chunks(256).enumerate().find_map(|(b, block)| {
+        let bad = block.iter().fold(0u32, |acc, v| {
+            acc | u32::from(v.to_bits() & EXPONENT == EXPONENT)
+        });
+        if bad == 0 {
+            None
+        } else {
+            block
+                .iter()
+                .position(|v| !v.is_finite())
+                .map(|i| b * 256 + i)
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,6 +221,25 @@ mod tests {
                 what: "image pixel",
                 index: 4
             }
+        );
+    }
+
+    #[test]
+    fn the_first_non_finite_pixel_is_found_in_any_block() {
+        let mut d = vec![1.5f32; 1000];
+        assert_eq!(first_non_finite(&d), None);
+        for (at, bad) in [
+            (999, f32::NAN),
+            (700, f32::INFINITY),
+            (256, f32::NEG_INFINITY),
+        ] {
+            d[at] = bad;
+            assert_eq!(first_non_finite(&d), Some(at));
+        }
+        // Large finite values and subnormals are finite.
+        assert_eq!(
+            first_non_finite(&[f32::MAX, -f32::MAX, 1e-45, 0.0, -0.0]),
+            None
         );
     }
 
