@@ -6,8 +6,10 @@
 //! FRAMES, RHO and SRHO (velocity retention of translation and shape), ST, SS, SSH (noise of
 //! translation, scale and shape), LC (λ_c), TOL, IT, LEV, MINPIX (motion estimator), EST (use the
 //! plain weighted mean), WIN and PD (Wu's window and detection probability), OA0 (no
-//! occlusion-aware proposal), WS0 (no warm start), DEFSET (accurate motion settings), V (per-seed
-//! lines).
+//! occlusion-aware proposal), WS0 (no warm start), DEFSET (accurate motion settings), RATIO=1
+//! (the ratio form of Wu's likelihood, `LikelihoodSettings::likelihood_ratio`), V (per-seed
+//! lines). Diagnostics: TRACE (one line per frame), LAND=k (likelihood landscape at frame k),
+//! DUMP=k (frame k as a binary PGM on stdout).
 
 use contour_obs::Ellipse;
 use scene_synth::{Scenario, ScenarioParams, Scene};
@@ -34,6 +36,15 @@ fn main() {
     let frames: Vec<_> = (0..scene.len())
         .map(|k| scene.render_frame(k).unwrap())
         .collect();
+    if let Some(k) = env("DUMP") {
+        // The frame as a binary PGM on stdout, to look at.
+        let (img, _) = &frames[k as usize];
+        let d = scene_synth::to_f32(img);
+        let mut out = format!("P5 {} {} 255\n", img.width(), img.height()).into_bytes();
+        out.extend(d.iter().map(|&v| v.clamp(0.0, 255.0) as u8));
+        std::io::Write::write_all(&mut std::io::stdout(), &out).unwrap();
+        return;
+    }
     if let Some(k) = env("LAND") {
         let (img, truth) = &frames[k as usize];
         let d = scene_synth::to_f32(img);
@@ -95,6 +106,9 @@ fn main() {
         }
         if let Some(v) = env("UO") {
             c.likelihood.unknown_occluder_share = v;
+        }
+        if let Some(v) = env("RATIO") {
+            c.likelihood.likelihood_ratio = v > 0.0;
         }
         if std::env::var("OA1").is_ok() {
             c.motion.occlusion_aware = true;

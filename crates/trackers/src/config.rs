@@ -425,6 +425,7 @@ impl Preset {
                     clutter_line_fraction: CLUTTER_LINE_FRACTION,
                     shape: None,
                     unknown_occluder_share: UNKNOWN_OCCLUDER_SHARE,
+                    likelihood_ratio: false,
                 },
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::Status(StatusConfig::default()),

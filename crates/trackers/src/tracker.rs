@@ -16,7 +16,7 @@ use crate::cluster::{Clustering, cluster_particles};
 use crate::config::{ClutterMode, OcclusionMode, PoseEstimator, ProposalKind, TrackerConfig};
 use crate::dynamics::{ClutterProcess, OcclusionModel, TrackerDynamics};
 use crate::frame::Frame;
-use crate::observation::{FrameObservation, LikelihoodModel};
+use crate::observation::{FrameObservation, LikelihoodModel, ReferenceLines};
 use crate::particle::{Particle, default_status};
 use crate::proposal::{ClusterMotion, MotionProposal, state_increment};
 use crate::space::{STATE_SLOTS, ShapeBounds, StateVector, axpy, pose_box};
@@ -120,6 +120,10 @@ pub struct ParticleTracker {
     status_states: Vec<StatusState>,
     /// Reused per frame: the mean previous state of each motion cluster.
     prev_means: Vec<StateVector>,
+    /// The last reported state, and the edge counts along its lines on the current frame (the
+    /// reference lines of the ratio form, see [`FrameObservation::reference`]).
+    last_state: StateVector,
+    reference: ReferenceLines,
     size: (usize, usize),
     frame: usize,
 }
@@ -161,6 +165,8 @@ impl ParticleTracker {
             clutter_states: Vec::new(),
             status_states: Vec::new(),
             prev_means: Vec::new(),
+            last_state: [0.0; STATE_SLOTS],
+            reference: ReferenceLines::default(),
             size: (0, 0),
             frame: 0,
             config,
@@ -409,6 +415,7 @@ impl Tracker for ParticleTracker {
         self.previous.clear();
         self.previous.extend_from_slice(frame.data());
         self.frame = 0;
+        self.last_state = centre;
         if self.config.needs_motion() {
             self.motion
                 .build_pyramid_into(frame.image_view()?, &mut self.pyramid_now)?;
@@ -441,11 +448,14 @@ impl Tracker for ParticleTracker {
         };
         let current = frame.grey_view();
         let previous = contour_obs::GreyView::new(self.size.0, self.size.1, &self.previous)?;
+        self.likelihood
+            .reference_counts(&current, &self.last_state, &mut self.reference)?;
         let observation = FrameObservation {
             model: &self.likelihood,
             current,
             previous,
             clusters: &self.clusters,
+            reference: &self.reference,
         };
         let weighted = match self.config.proposal {
             ProposalKind::Prior => {
@@ -491,6 +501,7 @@ impl Tracker for ParticleTracker {
             status,
         } = estimated?;
         self.frame += 1;
+        self.last_state = state;
         self.previous.clear();
         self.previous.extend_from_slice(frame.data());
         let mut report = self.report(state, 0.0)?;
