@@ -1,6 +1,7 @@
 //! End-to-end tracking on generated sequences with exact ground truth: every preset follows a
 //! short sequence, the motion proposal survives an abrupt motion that breaks CONDENSATION with
-//! tight dynamics, and the occlusion process rises and falls with a real occlusion.
+//! tight dynamics, the occlusion process rises with a real occlusion, and the reacquisition jump
+//! finds the target again after it.
 
 use contour_obs::Ellipse;
 use scene_synth::{FrameTruth, Scenario, ScenarioParams, Scene};
@@ -141,12 +142,15 @@ fn motion_proposal_survives_abrupt_motion_that_breaks_tight_condensation() {
 #[test]
 fn occlusion_estimate_rises_when_the_target_is_hidden() {
     // The occlusion scene: the target passes behind an opaque, edge-rich occluder and is fully
-    // hidden for about ten frames. γ̂ (Wu Eq. 14) must rise from its free-target level to near 1
-    // while the target is hidden. It should also fall once the target is out again, but no
-    // preset — w-occ, w-eval, full, nor the opt-in ratio form of Wu's likelihood
-    // (`LikelihoodSettings::likelihood_ratio`) — carries the target through the full occlusion
-    // and finds it again, so γ̂ stays where the lost track leaves it and that half of the check
-    // would assert a failure: see docs/RESULTS.md, "Hidden processes".
+    // hidden for about ten frames. w-occ's γ̂ (Wu Eq. 14) must rise from its free-target level to
+    // near 1 while the target is hidden. It should also fall once the target is out again, but
+    // that half is not asserted because no preset does both: w-occ's γ̂ rises and it loses the
+    // target (its γ ≈ 1 hypotheses outscore the reappearing target under Eq. 12 as printed, so
+    // not even the reacquisition jump brings it back), while w-eval finds the target again
+    // (`reacquisition_finds_the_target_after_a_full_occlusion`) but its γ̂ never rose: its
+    // contour shrinks onto the visible sliver and then onto the occluder with α̂ "locked"
+    // (measured γ̂ 0.08–0.11 before, during and after the occlusion, seeds 1–4). See
+    // docs/RESULTS.md, "Hidden processes".
     let clip = clip(Scenario::Occlusion, 120);
     let estimates = track(&clip, Preset::WOcc.config(200, 1));
     // Frame 0 is the initialisation, before any estimate: γ = 0 there.
@@ -168,5 +172,33 @@ fn occlusion_estimate_rises_when_the_target_is_hidden() {
     assert!(
         during > 0.8,
         "γ̂ should approach 1 while the target is hidden: {during:.3}"
+    );
+}
+
+#[test]
+fn reacquisition_finds_the_target_after_a_full_occlusion() {
+    // The frames after the last (almost) fully hidden one where the target is more than 80 %
+    // visible again. Without the reacquisition jump every preset scores 0 there for every seed
+    // (docs/RESULTS.md); with it w-eval measured 0.80, 0.79, 0.89, 0.78 over seeds 1–4 (mean
+    // 0.81). The threshold on the mean over the four seeds is 0.6: one seed that stays lost
+    // would leave at most 0.6.
+    let clip = clip(Scenario::Occlusion, 120);
+    let visible: Vec<f64> = clip.truth.iter().map(|t| t.visible_fraction).collect();
+    let last_hidden = visible.iter().rposition(|&v| v < 0.1).unwrap();
+    let after: Vec<usize> = (last_hidden..visible.len())
+        .filter(|&k| visible[k] > 0.8)
+        .collect();
+    assert!(after.len() >= 20, "reacquisition window {}", after.len());
+    let per_seed: Vec<f64> = (1..=4)
+        .map(|seed| {
+            let iou = ious(&clip, &track(&clip, Preset::WEval.config(200, seed)));
+            mean(&after.iter().map(|&k| iou[k]).collect::<Vec<_>>())
+        })
+        .collect();
+    println!("w-eval IoU after the occlusion, seeds 1–4: {per_seed:.3?}");
+    let m = mean(&per_seed);
+    assert!(
+        m > 0.6,
+        "mean IoU after the occlusion {m:.3} ({per_seed:.3?})"
     );
 }

@@ -8,7 +8,8 @@
 //! plain weighted mean), WIN and PD (Wu's window and detection probability), OA0 (no
 //! occlusion-aware proposal), WS0 (no warm start), DEFSET (accurate motion settings), RATIO=1
 //! (the ratio form of Wu's likelihood, `LikelihoodSettings::likelihood_ratio`), V (per-seed
-//! lines). Diagnostics: TRACE (one line per frame), LAND=k (likelihood landscape at frame k),
+//! lines), REACQ=1/0 (reacquisition jump on/off, `TrackerConfig::reacquisition`) with RQLOCK,
+//! RQRATE, RQMAX, RQSPREAD, RQGROW, RQPG, RQVG, RQSG, RQBACK, RQSHAPE (its settings). Diagnostics: TRACE (one line per frame), LAND=k (likelihood landscape at frame k),
 //! DUMP=k (frame k as a binary PGM on stdout).
 
 use contour_obs::Ellipse;
@@ -109,6 +110,32 @@ fn main() {
         }
         if let Some(v) = env("RATIO") {
             c.likelihood.likelihood_ratio = v > 0.0;
+        }
+        if env("REACQ").is_some_and(|v| v > 0.0) {
+            c.reacquisition.get_or_insert_with(Default::default);
+        }
+        if env("REACQ") == Some(0.0) {
+            c.reacquisition = None;
+        }
+        if let Some(r) = c.reacquisition.as_mut() {
+            for (k, slot) in [
+                ("RQLOCK", &mut r.lock_gamma),
+                ("RQSHAPE", &mut r.shape_tolerance),
+                ("RQRATE", &mut r.share_rate),
+                ("RQMAX", &mut r.max_share),
+                ("RQSPREAD", &mut r.spread),
+                ("RQGROW", &mut r.spread_growth),
+                ("RQPG", &mut r.position_gain),
+                ("RQVG", &mut r.velocity_gain),
+                ("RQSG", &mut r.shape_gain),
+            ] {
+                if let Some(v) = env(k) {
+                    *slot = v;
+                }
+            }
+            if let Some(v) = env("RQBACK") {
+                r.rollback = v as usize;
+            }
         }
         if std::env::var("OA1").is_ok() {
             c.motion.occlusion_aware = true;

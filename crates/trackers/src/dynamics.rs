@@ -17,6 +17,7 @@ use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use crate::particle::Particle;
+use crate::reacquire::{Reacquisition, log_mixture_density};
 use crate::space::{STATE_SLOTS, ShapeBounds, ShapeSpace, StateVector};
 use crate::{Error, Result};
 
@@ -239,9 +240,71 @@ pub struct TrackerDynamics {
     pub occlusion: OcclusionModel,
     /// The domain of the states, set from the initial contour by the tracker.
     pub bounds: ShapeBounds,
+    /// The reacquisition jump of the current frame, set by the tracker while the track is not
+    /// locked (see [`crate::reacquire`]); `None`: the plain prior.
+    pub reacquisition: Option<Reacquisition>,
 }
 
 impl TrackerDynamics {
+    /// η, the probability that a particle jumps to the reacquisition component this frame (0
+    /// without one).
+    pub fn jump_share(&self) -> f64 {
+        self.reacquisition.as_ref().map_or(0.0, |r| r.share)
+    }
+
+    /// Draws whether a particle jumps this frame; draws nothing when it cannot, so that without a
+    /// reacquisition component the random streams are those of the plain prior.
+    pub fn draws_jump<R: Rng + ?Sized>(&self, rng: &mut R) -> bool {
+        let eta = self.jump_share();
+        eta > 0.0 && rng.random::<f64>() < eta
+    }
+
+    /// A jump of `previous`: the kinematic pair from the reacquisition component, the clutter
+    /// from its transition and the status from the transition of a locked target (a target
+    /// that reappears is seen whole, whatever the ancestor believed).
+    pub fn sample_jump<R: Rng + ?Sized>(&self, previous: &Particle, rng: &mut R) -> Particle {
+        let mut next = *previous;
+        if let Some(r) = &self.reacquisition {
+            let (now, prev) = r.sample(self.space, rng);
+            next.now = now;
+            next.prev = prev;
+            self.space.clamp(&mut next.now, &self.bounds);
+        }
+        let locked = Particle {
+            status: match &self.occlusion {
+                OcclusionModel::RandomWalk(walk) => StatusState {
+                    gamma: walk.initial().gamma,
+                    ..previous.status
+                },
+                _ => StatusState {
+                    alpha: dbn_switch::Status::Locked,
+                    gamma: 0.0,
+                },
+            },
+            ..*previous
+        };
+        self.sample_hidden(&locked, &mut next, rng);
+        next
+    }
+
+    /// The density of `next` under the mixture of the jump (share η) and the continuation whose
+    /// log-density `log_continue` computes (see [`crate::reacquire::log_mixture_density`]).
+    pub fn log_with_jump(
+        &self,
+        previous: &Particle,
+        next: &Particle,
+        log_continue: impl FnOnce() -> f64,
+    ) -> f64 {
+        log_mixture_density(
+            self.reacquisition.as_ref(),
+            self.space,
+            self.jump_share(),
+            Reacquisition::is_jump(&previous.now, &next.prev),
+            &next.now,
+            log_continue,
+        )
+    }
+
     /// Draws the hidden variables of the next step from their transitions (Wu Fig. 6 steps 2b–2c
     /// and Eq. 13). Every proposal of this crate draws them this way, so their prior and proposal
     /// densities cancel in the weight (Odobez Eq. 3) and are never evaluated.
@@ -313,6 +376,9 @@ impl smc_core::Dynamics for TrackerDynamics {
     type State = Particle;
 
     fn sample<R: Rng + ?Sized>(&self, previous: &Particle, rng: &mut R) -> Particle {
+        if self.draws_jump(rng) {
+            return self.sample_jump(previous, rng);
+        }
         let mut next = *previous;
         next.prev = previous.now;
         next.now = self.sample_kinematics(previous, rng);
@@ -321,9 +387,12 @@ impl smc_core::Dynamics for TrackerDynamics {
     }
 
     /// The kinematic density only: the hidden variables are drawn from their own transitions by
-    /// every proposal, so their densities cancel (see [`TrackerDynamics::sample_hidden`]).
+    /// every proposal, so their densities cancel (see [`TrackerDynamics::sample_hidden`]); with a
+    /// reacquisition component, the mixture density of the particle's component.
     fn log_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        self.log_kinematic_density(previous, next)
+        self.log_with_jump(previous, next, || {
+            self.log_kinematic_density(previous, next)
+        })
     }
 }
 
@@ -344,6 +413,7 @@ mod tests {
             clutter: ClutterProcess::Fixed(0.05),
             occlusion: OcclusionModel::None,
             bounds: ShapeBounds::loose(2.0),
+            reacquisition: None,
         }
     }
 

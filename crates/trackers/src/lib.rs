@@ -59,6 +59,7 @@ pub mod frame;
 pub mod observation;
 pub mod particle;
 pub mod proposal;
+pub mod reacquire;
 pub mod space;
 pub mod tracker;
 

@@ -193,6 +193,9 @@ impl smc_core::Proposal for MotionProposal<'_> {
     type State = Particle;
 
     fn sample<R: Rng + ?Sized>(&self, _index: usize, previous: &Particle, rng: &mut R) -> Particle {
+        if self.dynamics.draws_jump(rng) {
+            return self.dynamics.sample_jump(previous, rng);
+        }
         let mut next = *previous;
         next.prev = previous.now;
         let use_prior = self.prior_share(previous) > rng.random::<f64>();
@@ -219,7 +222,18 @@ impl smc_core::Proposal for MotionProposal<'_> {
         next
     }
 
+    /// The density of the particle's component: the jump (share η, identical to the prior's, see
+    /// [`crate::reacquire`]) or the continuation below, times 1 − η.
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
+        self.dynamics.log_with_jump(previous, next, || {
+            self.log_continuation_density(previous, next)
+        })
+    }
+}
+
+impl MotionProposal<'_> {
+    /// log q of a continuation: Eq. 16, or its mixture with the prior by γ.
+    fn log_continuation_density(&self, previous: &Particle, next: &Particle) -> f64 {
         let Some(motion) = self.cluster(previous) else {
             return self.dynamics.log_kinematic_density(previous, next);
         };
@@ -314,6 +328,7 @@ mod tests {
             clutter: ClutterProcess::Fixed(0.05),
             occlusion: OcclusionModel::None,
             bounds: crate::space::ShapeBounds::loose(2.0),
+            reacquisition: None,
         };
         let mut cov = Matrix6::zeros();
         cov[(0, 0)] = 0.5;

@@ -84,8 +84,16 @@ impl ShapeSpace {
     /// `bounds.scale` pixels and elongation within `bounds.aspect` (Odobez: e in that range;
     /// affine: the ratio of the singular values of A at most `bounds.aspect.1`, the area kept).
     /// Heavy-tailed (Cauchy) noise can otherwise produce a negative scale, which has no contour,
-    /// and a contour can otherwise collapse onto a thin bar of clutter that fits its lines.
+    /// and a contour can otherwise collapse onto a thin bar of clutter that fits its lines. The
+    /// centre is kept in `bounds.centre`.
     pub fn clamp(self, x: &mut StateVector, bounds: &ShapeBounds) {
+        let (tx, ty) = match self {
+            ShapeSpace::Odobez => (0, 1),
+            ShapeSpace::Affine => (4, 5),
+        };
+        let c = bounds.centre;
+        x[tx] = x[tx].clamp(c[0], c[2]);
+        x[ty] = x[ty].clamp(c[1], c[3]);
         let (min, max) = bounds.scale;
         match self {
             ShapeSpace::Odobez => {
@@ -140,7 +148,17 @@ pub struct ShapeBounds {
     pub scale: (f64, f64),
     /// Smallest and largest elongation (Odobez e; affine: only the upper bound is used).
     pub aspect: (f64, f64),
+    /// The box the centre is kept in, `[x_min, y_min, x_max, y_max]` (unbounded by default).
+    pub centre: [f64; 4],
 }
+
+/// No bound on the centre.
+pub const UNBOUNDED_CENTRE: [f64; 4] = [
+    f64::NEG_INFINITY,
+    f64::NEG_INFINITY,
+    f64::INFINITY,
+    f64::INFINITY,
+];
 
 impl ShapeBounds {
     /// Bounds that only keep a state valid: radius ≥ `min_scale`, e in [1/4, 4].
@@ -148,6 +166,7 @@ impl ShapeBounds {
         Self {
             scale: (min_scale, f64::INFINITY),
             aspect: (0.25, 4.0),
+            centre: UNBOUNDED_CENTRE,
         }
     }
 }
@@ -222,6 +241,7 @@ mod tests {
         let bounds = ShapeBounds {
             scale: (2.0, 1e3),
             aspect: (0.5, 2.0),
+            centre: UNBOUNDED_CENTRE,
         };
         ShapeSpace::Affine.clamp(&mut x, &bounds);
         let back = ShapeSpace::Affine.pose(&x).to_ellipse().unwrap();

@@ -19,7 +19,8 @@ use crate::frame::Frame;
 use crate::observation::{FrameObservation, LikelihoodModel, ReferenceLines};
 use crate::particle::{Particle, default_status};
 use crate::proposal::{ClusterMotion, MotionProposal, state_increment};
-use crate::space::{STATE_SLOTS, ShapeBounds, StateVector, axpy, pose_box};
+use crate::reacquire::{Reacquisition, TrackMemory};
+use crate::space::{STATE_SLOTS, ShapeBounds, StateVector, UNBOUNDED_CENTRE, axpy, pose_box};
 use crate::{Error, Result};
 
 /// What a tracker reports for one frame.
@@ -124,6 +125,11 @@ pub struct ParticleTracker {
     /// reference lines of the ratio form, see [`FrameObservation::reference`]).
     last_state: StateVector,
     reference: ReferenceLines,
+    /// The constant-velocity memory of the locked estimates (see [`crate::reacquire`]).
+    memory: TrackMemory,
+    /// The memory after each of the last locked frames, oldest first: the anchor of the jump is
+    /// the oldest (see [`crate::reacquire::ReacquisitionSettings::rollback`]).
+    history: std::collections::VecDeque<TrackMemory>,
     size: (usize, usize),
     frame: usize,
 }
@@ -151,6 +157,7 @@ impl ParticleTracker {
                 clutter,
                 occlusion,
                 bounds: ShapeBounds::loose(config.dynamics.min_scale),
+                reacquisition: None,
             },
             likelihood: LikelihoodModel::new(config.space, &config.likelihood)?,
             filter: ParticleFilter::new(config.filter.clone())?,
@@ -167,6 +174,8 @@ impl ParticleTracker {
             prev_means: Vec::new(),
             last_state: [0.0; STATE_SLOTS],
             reference: ReferenceLines::default(),
+            memory: TrackMemory::new([0.0; STATE_SLOTS], 0),
+            history: std::collections::VecDeque::new(),
             size: (0, 0),
             frame: 0,
             config,
@@ -345,6 +354,60 @@ impl ParticleTracker {
         })
     }
 
+    /// The reacquisition jump of frame `frame`: present when the configuration asks for it and
+    /// the frames since the last locked one are not locked (see [`crate::reacquire`]).
+    fn reacquisition_component(&self, frame: usize) -> Option<Reacquisition> {
+        let settings = self.config.reacquisition.as_ref()?;
+        let gap = frame.saturating_sub(self.memory.last_locked() + 1);
+        let share = (settings.share_rate * gap as f64).min(settings.max_share);
+        if gap == 0 || share <= 0.0 {
+            return None;
+        }
+        let space = self.config.space;
+        let anchor = self.history.front().unwrap_or(&self.memory);
+        let (mean, velocity) = anchor.extrapolate(space, frame);
+        let mut sigmas = self.dynamics.settings.sigmas(space, &mean);
+        for (j, s) in sigmas.iter_mut().enumerate().take(space.dim()) {
+            if space.is_translation(j) {
+                *s = settings.spread + settings.spread_growth * gap as f64;
+            }
+        }
+        Some(Reacquisition {
+            share,
+            mean,
+            velocity,
+            sigmas,
+        })
+    }
+
+    /// The box the centre of every state is kept in: the frame when reacquisition is on (a lost
+    /// track that runs off the image, where Wu's occluded lines are the most probable of all,
+    /// would never come back), else unbounded.
+    fn centre_bounds(&self, frame: &Frame<'_>) -> [f64; 4] {
+        if self.config.reacquisition.is_some() {
+            [0.0, 0.0, frame.width() as f64, frame.height() as f64]
+        } else {
+            UNBOUNDED_CENTRE
+        }
+    }
+
+    /// Whether a reported estimate is locked: γ̂ below the configured level, α̂ (if modelled)
+    /// locked and the remembered shape. Without reacquisition settings every estimate is.
+    fn is_locked(
+        &self,
+        state: &StateVector,
+        gamma: Option<f64>,
+        status: Option<&StatusEstimate>,
+    ) -> bool {
+        let Some(settings) = &self.config.reacquisition else {
+            return true;
+        };
+        self.memory
+            .shape_agrees(self.config.space, state, settings.shape_tolerance)
+            && gamma.is_none_or(|g| g < settings.lock_gamma)
+            && status.is_none_or(|s| s.alpha_hat == dbn_switch::Status::Locked)
+    }
+
     fn check_frame(&self, frame: &Frame<'_>) -> Result<()> {
         if (frame.width(), frame.height()) != self.size {
             return Err(Error::BadFrame {
@@ -394,6 +457,7 @@ impl Tracker for ParticleTracker {
                 (d.aspect_range[0] * e0).max(0.25),
                 (d.aspect_range[1] * e0).clamp(1.0, 4.0),
             ),
+            centre: self.centre_bounds(&frame),
         };
         let sigmas = self.dynamics.settings.sigmas(space, &centre);
         let spread = self.config.init_spread;
@@ -416,6 +480,10 @@ impl Tracker for ParticleTracker {
         self.previous.extend_from_slice(frame.data());
         self.frame = 0;
         self.last_state = centre;
+        self.memory = TrackMemory::new(centre, 0);
+        self.history.clear();
+        self.history.push_back(self.memory.clone());
+        self.dynamics.reacquisition = None;
         if self.config.needs_motion() {
             self.motion
                 .build_pyramid_into(frame.image_view()?, &mut self.pyramid_now)?;
@@ -446,6 +514,7 @@ impl Tracker for ParticleTracker {
         let Some(mut set) = self.set.take() else {
             return Err(Error::NotInitialised);
         };
+        self.dynamics.reacquisition = self.reacquisition_component(self.frame + 1);
         let current = frame.grey_view();
         let previous = contour_obs::GreyView::new(self.size.0, self.size.1, &self.previous)?;
         self.likelihood
@@ -502,6 +571,16 @@ impl Tracker for ParticleTracker {
         } = estimated?;
         self.frame += 1;
         self.last_state = state;
+        if self.is_locked(&state, gamma, status.as_ref())
+            && let Some(settings) = &self.config.reacquisition
+        {
+            self.memory
+                .observe(self.config.space, settings, &state, self.frame);
+            self.history.push_back(self.memory.clone());
+            while self.history.len() > settings.rollback + 1 {
+                self.history.pop_front();
+            }
+        }
         self.previous.clear();
         self.previous.extend_from_slice(frame.data());
         let mut report = self.report(state, 0.0)?;

@@ -1,0 +1,354 @@
+//! Reacquisition after an occlusion: a jump component of the transition prior, drawn around the
+//! constant-velocity extrapolation of the last confidently locked estimate.
+//!
+//! Beyond both papers, in the spirit of Isard & Blake's ICONDENSATION (a share of the particles
+//! from a second importance function, the rest from the prior). While the track is locked the
+//! component is absent and the filter is exactly the preset's. Once the reported estimate stops
+//! being locked (γ̂ high, α̂ not locked, or a contour whose size or elongation departs from the
+//! remembered one), every particle jumps with probability η = min(η_max, r · gap), `gap` the
+//! number of unlocked frames so far, to
+//!
+//! c_k = (α_k, α_{k−1}) with α_k ~ N(m_k, diag σ_k²), α_{k−1} = α_k − v,
+//!
+//! m_k the last locked pose — as remembered a few locked frames before the last one
+//! ([`ReacquisitionSettings::rollback`]), since a track in trouble lags before any test flags it —
+//! extrapolated at the remembered velocity v, σ_k growing with the gap, and its hidden status
+//! redrawn as if it had been locked. With reacquisition on, the tracker also keeps every centre in
+//! the frame: a lost track that runs off the image, where Wu's occluded lines are the most
+//! probable of all, would otherwise never be back where the target reappears. The component is part of the *model*
+//! (a hidden target may reappear where its last motion would have carried it), so the prior and
+//! every proposal carry the same η: with the bootstrap filter the weights stay the likelihood, and
+//! with the motion proposal the weight is the prior over the proposal density of the component
+//! the particle came from. The two components have disjoint supports in c_k — a jump sets
+//! α_{k−1} = α_k − v, a continuation keeps α_{k−1} equal to the previous α_k — so the mixture
+//! density of a particle is that of its own component, times its share.
+
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::space::{STATE_SLOTS, ShapeSpace, StateVector};
+use crate::{Error, Result};
+
+/// Settings of the reacquisition component.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReacquisitionSettings {
+    /// The reported estimate is locked while γ̂ is below this (and α̂, if modelled, is locked).
+    pub lock_gamma: f64,
+    /// ... and while its scale and elongation are within this log-ratio of the remembered ones:
+    /// a contour shrinking onto the visible part of a target that slides behind an occluder is
+    /// not a confident lock, whatever γ̂ says (w-eval's α̂ stays "locked" on the sliver).
+    pub shape_tolerance: f64,
+    /// The jump starts from the memory as it was this many locked frames before the last one: a
+    /// track in trouble lags behind its target for a few frames before any test flags it.
+    pub rollback: usize,
+    /// r: growth of the jump share per unlocked frame.
+    pub share_rate: f64,
+    /// η_max: the largest jump share.
+    pub max_share: f64,
+    /// Translation spread of the jump at the first unlocked frame, pixels.
+    pub spread: f64,
+    /// Growth of the translation spread per unlocked frame, pixels.
+    pub spread_growth: f64,
+    /// Gain of the position in the constant-velocity memory of the locked estimates (α of an
+    /// α–β filter).
+    pub position_gain: f64,
+    /// Gain of the velocity (β of the α–β filter).
+    pub velocity_gain: f64,
+    /// Gain of the size and shape components (an exponential average: the target's shape is
+    /// remembered from many locked frames, so that a contour shrinking onto a visible sliver
+    /// does not become the shape of the reacquired target).
+    pub shape_gain: f64,
+}
+
+impl Default for ReacquisitionSettings {
+    fn default() -> Self {
+        Self {
+            lock_gamma: 0.15,
+            shape_tolerance: 0.15,
+            rollback: 5,
+            share_rate: 0.02,
+            max_share: 0.3,
+            spread: 3.0,
+            spread_growth: 0.5,
+            position_gain: 0.5,
+            velocity_gain: 0.2,
+            shape_gain: 0.05,
+        }
+    }
+}
+
+impl ReacquisitionSettings {
+    /// Checks that every value is finite, the shares and gains in [0, 1] and the spread positive.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] naming the field.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [
+            ("reacquisition.lock_gamma", self.lock_gamma),
+            ("reacquisition.max_share", self.max_share),
+            ("reacquisition.position_gain", self.position_gain),
+            ("reacquisition.velocity_gain", self.velocity_gain),
+            ("reacquisition.shape_gain", self.shape_gain),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(Error::InvalidSetting {
+                    name,
+                    reason: format!("{v} must be in [0, 1]"),
+                });
+            }
+        }
+        for (name, v, positive) in [
+            ("reacquisition.share_rate", self.share_rate, false),
+            ("reacquisition.shape_tolerance", self.shape_tolerance, true),
+            ("reacquisition.spread", self.spread, true),
+            ("reacquisition.spread_growth", self.spread_growth, false),
+        ] {
+            if !(v.is_finite() && (v > 0.0 || (!positive && v == 0.0))) {
+                return Err(Error::InvalidSetting {
+                    name,
+                    reason: format!(
+                        "{v} must be finite and {}",
+                        if positive { "positive" } else { "non-negative" }
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The constant-velocity memory of the locked estimates: an α–β filter on the translation and an
+/// exponential average of the other components, updated only on locked frames.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackMemory {
+    /// The filtered state at `frame`.
+    state: StateVector,
+    /// Its velocity per frame (translation only; zero elsewhere).
+    velocity: StateVector,
+    /// The last locked frame.
+    frame: usize,
+}
+
+impl TrackMemory {
+    /// A memory of a target at rest at `state`, locked at `frame`.
+    pub fn new(state: StateVector, frame: usize) -> Self {
+        Self {
+            state,
+            velocity: [0.0; STATE_SLOTS],
+            frame,
+        }
+    }
+
+    /// The last locked frame.
+    pub fn last_locked(&self) -> usize {
+        self.frame
+    }
+
+    /// Whether `state` has the remembered scale and elongation, within a log-ratio `tolerance`.
+    pub fn shape_agrees(&self, space: ShapeSpace, state: &StateVector, tolerance: f64) -> bool {
+        let ratio = |a: f64, b: f64| (a / b).ln().abs();
+        ratio(space.scale(state), space.scale(&self.state)) <= tolerance
+            && ratio(space.elongation(state), space.elongation(&self.state)) <= tolerance
+    }
+
+    /// The remembered pose extrapolated to `frame`, and the velocity.
+    pub fn extrapolate(&self, space: ShapeSpace, frame: usize) -> (StateVector, StateVector) {
+        let k = frame.saturating_sub(self.frame) as f64;
+        let mut x = self.state;
+        for j in (0..space.dim()).filter(|&j| space.is_translation(j)) {
+            x[j] += k * self.velocity[j];
+        }
+        (x, self.velocity)
+    }
+
+    /// Takes the locked estimate `state` of `frame` into the memory.
+    pub fn observe(
+        &mut self,
+        space: ShapeSpace,
+        settings: &ReacquisitionSettings,
+        state: &StateVector,
+        frame: usize,
+    ) {
+        let (predicted, _) = self.extrapolate(space, frame);
+        let steps = frame.saturating_sub(self.frame).max(1) as f64;
+        for j in 0..space.dim() {
+            let residual = state[j] - predicted[j];
+            if space.is_translation(j) {
+                self.state[j] = predicted[j] + settings.position_gain * residual;
+                self.velocity[j] += settings.velocity_gain * residual / steps;
+            } else {
+                self.state[j] = predicted[j] + settings.shape_gain * residual;
+            }
+        }
+        self.frame = frame;
+    }
+}
+
+/// The jump component of one frame (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reacquisition {
+    /// The jump share of this frame, η = min(η_max, r · gap).
+    pub share: f64,
+    /// m_k, the extrapolated pose.
+    pub mean: StateVector,
+    /// v, the velocity α_k − α_{k−1} given to a jumping particle.
+    pub velocity: StateVector,
+    /// σ_k per component.
+    pub sigmas: StateVector,
+}
+
+impl Reacquisition {
+    /// Draws (α_k, α_{k−1}) of a jump.
+    pub fn sample<R: Rng + ?Sized>(
+        &self,
+        space: ShapeSpace,
+        rng: &mut R,
+    ) -> (StateVector, StateVector) {
+        let d = space.dim();
+        let mut now = self.mean;
+        for (x, sigma) in now.iter_mut().zip(&self.sigmas).take(d) {
+            let z: f64 = StandardNormal.sample(rng);
+            *x += sigma * z;
+        }
+        let mut prev = now;
+        for (x, v) in prev.iter_mut().zip(&self.velocity).take(d) {
+            *x -= v;
+        }
+        (now, prev)
+    }
+
+    /// Whether a particle with states (`now`, `prev`) can have come from a jump (rather than a
+    /// continuation, which keeps α_{k−1} equal to its ancestor's α_k = `ancestor_now`).
+    pub fn is_jump(ancestor_now: &StateVector, prev: &StateVector) -> bool {
+        ancestor_now != prev
+    }
+
+    /// log N(α_k; m_k, diag σ_k²) over the used dimensions (the α_{k−1} part is a point mass).
+    pub fn log_density(&self, space: ShapeSpace, now: &StateVector) -> f64 {
+        (0..space.dim())
+            .map(|j| {
+                let z = (now[j] - self.mean[j]) / self.sigmas[j];
+                -0.5 * z * z - self.sigmas[j].ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
+            })
+            .sum()
+    }
+}
+
+/// log((1 − η) e^{log_continue}) for a continuation and log(η N(α_k; m_k, σ_k)) for a jump: the
+/// density of a particle under a mixture whose components have disjoint supports.
+pub fn log_mixture_density(
+    component: Option<&Reacquisition>,
+    space: ShapeSpace,
+    share: f64,
+    jumped: bool,
+    now: &StateVector,
+    log_continue: impl FnOnce() -> f64,
+) -> f64 {
+    match component {
+        Some(c) if share > 0.0 => {
+            if jumped {
+                share.ln() + c.log_density(space, now)
+            } else {
+                (1.0 - share).ln() + log_continue()
+            }
+        }
+        _ => log_continue(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    #[test]
+    fn memory_learns_a_constant_velocity_and_extrapolates_it() {
+        let space = ShapeSpace::Odobez;
+        let s = ReacquisitionSettings::default();
+        let mut m = TrackMemory::new([100.0, 50.0, 20.0, 1.0, 0.0, 0.0], 0);
+        for k in 1..=100 {
+            m.observe(
+                space,
+                &s,
+                &[100.0 - 2.0 * k as f64, 50.0, 20.0, 1.0, 0.0, 0.0],
+                k,
+            );
+        }
+        let (x, v) = m.extrapolate(space, 110);
+        assert!((v[0] + 2.0).abs() < 0.05, "{v:?}");
+        assert!((x[0] - (100.0 - 220.0)).abs() < 1.0, "{x:?}");
+        assert!((x[2] - 20.0).abs() < 1e-9 && v[2] == 0.0);
+    }
+
+    #[test]
+    fn jump_has_the_stated_spread_and_velocity() {
+        let space = ShapeSpace::Affine;
+        let r = Reacquisition {
+            share: 0.2,
+            mean: [20.0, 0.0, 0.0, 15.0, 100.0, 80.0],
+            velocity: [0.0, 0.0, 0.0, 0.0, -2.0, 0.5],
+            sigmas: [0.2, 0.1, 0.1, 0.2, 5.0, 5.0],
+        };
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+        let n = 20_000;
+        let (mut m, mut v) = (0.0, 0.0);
+        for _ in 0..n {
+            let (now, prev) = r.sample(space, &mut rng);
+            assert!((now[4] - prev[4] + 2.0).abs() < 1e-12);
+            assert!(Reacquisition::is_jump(&r.mean, &prev));
+            m += now[4];
+            v += (now[4] - 100.0).powi(2);
+        }
+        m /= n as f64;
+        v /= n as f64;
+        assert!((m - 100.0).abs() < 0.2, "{m}");
+        assert!((v / 25.0 - 1.0).abs() < 0.05, "{v}");
+    }
+
+    #[test]
+    fn mixture_density_weights_each_component_by_its_share() {
+        let space = ShapeSpace::Odobez;
+        let r = Reacquisition {
+            share: 0.3,
+            mean: [0.0; 6],
+            velocity: [0.0; 6],
+            sigmas: [1.0; 6],
+        };
+        let x = [0.5, -0.5, 0.0, 0.0, 0.0, 0.0];
+        let jump = log_mixture_density(Some(&r), space, 0.3, true, &x, || unreachable!());
+        assert!((jump - (0.3f64.ln() + r.log_density(space, &x))).abs() < 1e-12);
+        let cont = log_mixture_density(Some(&r), space, 0.3, false, &x, || -2.0);
+        assert!((cont - (0.7f64.ln() - 2.0)).abs() < 1e-12);
+        assert_eq!(
+            log_mixture_density(None, space, 0.3, true, &x, || -2.0),
+            -2.0
+        );
+        assert_eq!(
+            log_mixture_density(Some(&r), space, 0.0, false, &x, || -2.0),
+            -2.0
+        );
+    }
+
+    #[test]
+    fn invalid_settings_are_rejected() {
+        assert!(ReacquisitionSettings::default().validate().is_ok());
+        for bad in [
+            ReacquisitionSettings {
+                max_share: 1.5,
+                ..Default::default()
+            },
+            ReacquisitionSettings {
+                spread: 0.0,
+                ..Default::default()
+            },
+            ReacquisitionSettings {
+                share_rate: f64::NAN,
+                ..Default::default()
+            },
+        ] {
+            assert!(bad.validate().is_err());
+        }
+    }
+}
