@@ -67,6 +67,7 @@ mod image;
 mod lines;
 mod math;
 mod odobez;
+mod scan;
 mod wu;
 
 pub use affine::{Affine2, BoundingBox, Ellipse};

@@ -9,6 +9,7 @@
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
+use crate::scan::LineScan;
 use crate::{Affine2, Contour, EdgeDetector, EdgeSettings, Error, GreyView, Result};
 
 /// Geometry of the measurement lines and the edge detector used on them.
@@ -94,6 +95,19 @@ pub struct MeasurementLines {
     /// Line i's edges are `edges[starts[i]..starts[i + 1]]`.
     starts: Vec<usize>,
     edges: Vec<f64>,
+    /// The fast scan of the lines wholly inside the image ([`LineScan`]), and each line's place
+    /// in it after [`Self::scan_lines`].
+    scan: LineScan,
+    plan: Vec<Planned>,
+}
+
+/// One line of [`MeasurementLines::scan_lines`]: where it is, and its index in the fast scan
+/// (`None`: the general path takes it).
+#[derive(Debug, Clone, Copy)]
+struct Planned {
+    centre: Vector2<f64>,
+    normal: Option<Vector2<f64>>,
+    fast: Option<usize>,
 }
 
 impl MeasurementLines {
@@ -119,6 +133,8 @@ impl MeasurementLines {
             observed_len: Vec::with_capacity(n),
             starts,
             edges: Vec::with_capacity(4 * n),
+            scan: LineScan::default(),
+            plan: Vec::with_capacity(n),
         })
     }
 
@@ -161,10 +177,16 @@ impl MeasurementLines {
                 got: contour.len(),
             });
         }
+        let half = self.settings.half_length() as i64;
+        self.scan_lines(image, contour, pose, -half, half);
         self.clear();
         for i in 0..contour.len() {
-            let (p, n) = contour.pose_point(pose, i);
-            self.push_line(image, p, n);
+            let planned = self.plan[i];
+            let examined = match planned.fast {
+                Some(line) => self.append_fast(line),
+                None => self.append_general(image, planned.centre, planned.normal),
+            };
+            self.record(planned.centre, planned.normal, examined);
         }
         Ok(())
     }
@@ -178,34 +200,201 @@ impl MeasurementLines {
         normal: Option<Vector2<f64>>,
     ) {
         let half = self.settings.half_length() as i64;
-        let full = self.settings.length as f64;
-        let mut examined = 0usize;
-        let interval = normal
-            .filter(|_| centre.x.is_finite() && centre.y.is_finite())
-            .and_then(|n| inside_interval(image, centre, n, self.reach).map(|iv| (n, iv)));
-        if let Some((n, (lo, hi))) = interval {
-            let len = (hi - lo + 1) as usize;
-            self.samples.resize(len, 0.0);
-            image.sample_line((centre.x, centre.y), (n.x, n.y), lo, hi, &mut self.samples);
-            let before = self.edges.len();
-            examined = self
-                .detector
-                .detect(&self.samples, lo, -half, half, &mut self.edges);
-            if !self.enough(examined) {
-                self.edges.truncate(before);
-                examined = 0;
-            }
-        }
-        let observed = examined > 0;
+        let examined = match self.scan_one(image, centre, normal, -half, half) {
+            Some(line) => self.append_fast(line),
+            None => self.append_general(image, centre, normal),
+        };
+        self.record(centre, normal, examined);
+    }
+
+    /// Records a line whose edges were just appended.
+    fn record(&mut self, centre: Vector2<f64>, normal: Option<Vector2<f64>>, examined: usize) {
         self.centres.push(centre);
         self.normals.push(normal.unwrap_or_else(Vector2::zeros));
-        self.observed.push(observed);
-        self.observed_len.push(if observed {
-            full * examined as f64 / (2 * half + 1) as f64
+        self.observed.push(examined > 0);
+        self.observed_len.push(self.length_of(examined));
+        self.starts.push(self.edges.len());
+    }
+
+    /// Scans the candidates `klo ..= khi` of every line of `contour` under `pose`: the lines
+    /// wholly inside the image in one [`LineScan`], the others marked for the general path.
+    /// Each line's plan is then in `plan`. The pose must be finite.
+    pub(crate) fn scan_lines(
+        &mut self,
+        image: &GreyView<'_>,
+        contour: &Contour,
+        pose: &Affine2,
+        klo: i64,
+        khi: i64,
+    ) {
+        self.plan.clear();
+        let fits = self.scan.begin(&self.detector, klo, khi, contour.len());
+        for i in 0..contour.len() {
+            let (centre, normal) = contour.pose_point(pose, i);
+            let fast = if fits {
+                self.plan_fast(image, centre, normal)
+            } else {
+                None
+            };
+            self.plan.push(Planned {
+                centre,
+                normal,
+                fast,
+            });
+        }
+        self.scan.finish(&self.detector);
+    }
+
+    /// One line through the fast scan alone: its index there, or `None` for the general path.
+    fn scan_one(
+        &mut self,
+        image: &GreyView<'_>,
+        centre: Vector2<f64>,
+        normal: Option<Vector2<f64>>,
+        klo: i64,
+        khi: i64,
+    ) -> Option<usize> {
+        if !self.scan.begin(&self.detector, klo, khi, 1) {
+            return None;
+        }
+        let line = self.plan_fast(image, centre, normal)?;
+        self.scan.finish(&self.detector);
+        Some(line)
+    }
+
+    /// Adds the line to the fast scan when it lies wholly inside the image: the test on the
+    /// end points ±reach is the one `inside_interval` starts with, so both paths agree on
+    /// which lines are wholly inside; [`LineScan::push`] then checks the fixed-point positions.
+    #[inline]
+    fn plan_fast(
+        &mut self,
+        image: &GreyView<'_>,
+        c: Vector2<f64>,
+        normal: Option<Vector2<f64>>,
+    ) -> Option<usize> {
+        let n = normal.filter(|_| c.x.is_finite() && c.y.is_finite())?;
+        let r = self.reach as f64;
+        let (xmax, ymax) = ((image.width() - 1) as f64, (image.height() - 1) as f64);
+        let (x0, y0, x1, y1) = (c.x - r * n.x, c.y - r * n.y, c.x + r * n.x, c.y + r * n.y);
+        let inside = (0.0..=xmax).contains(&x0)
+            && (0.0..=ymax).contains(&y0)
+            && (0.0..=xmax).contains(&x1)
+            && (0.0..=ymax).contains(&y1);
+        if !inside {
+            return None;
+        }
+        self.scan.push(image, (c.x, c.y), (n.x, n.y))
+    }
+
+    /// Appends the edges of fast line `line` (candidates −L/2 ..= L/2) and returns the offsets
+    /// examined: all L + 1 of a line wholly inside.
+    fn append_fast(&mut self, line: usize) -> usize {
+        let examined = self.settings.length + 1;
+        if !self.enough(examined) {
+            return 0;
+        }
+        let mut mask = self.scan.mask(line);
+        while mask != 0 {
+            self.edges
+                .push(self.scan.offset(line, mask.trailing_zeros()));
+            mask &= mask - 1;
+        }
+        examined
+    }
+
+    /// The general path: appends the edges of one line to `edges` (none for an unobserved line)
+    /// and returns how many offsets were examined (0: unobserved).
+    fn append_general(
+        &mut self,
+        image: &GreyView<'_>,
+        centre: Vector2<f64>,
+        normal: Option<Vector2<f64>>,
+    ) -> usize {
+        let Some(n) = normal.filter(|_| centre.x.is_finite() && centre.y.is_finite()) else {
+            return 0;
+        };
+        let Some((lo, hi)) = inside_interval(image, centre, n, self.reach) else {
+            return 0;
+        };
+        let half = self.settings.half_length() as i64;
+        let len = (hi - lo + 1) as usize;
+        self.samples.resize(len, 0.0);
+        image.sample_line((centre.x, centre.y), (n.x, n.y), lo, hi, &mut self.samples);
+        let before = self.edges.len();
+        let examined = self
+            .detector
+            .detect(&self.samples, lo, -half, half, &mut self.edges);
+        if self.enough(examined) {
+            examined
+        } else {
+            self.edges.truncate(before);
+            0
+        }
+    }
+
+    /// The observed length of a line with `examined` offsets examined (0: unobserved, full L).
+    #[inline]
+    fn length_of(&self, examined: usize) -> f64 {
+        let full = self.settings.length as f64;
+        if examined > 0 {
+            full * examined as f64 / (2 * self.settings.half_length() + 1) as f64
         } else {
             full
-        });
-        self.starts.push(self.edges.len());
+        }
+    }
+
+    /// Line `i` of the last [`Self::scan_lines`] (candidates −L/2 ..= L/2) without storing it:
+    /// returns (observed length, number of edges m(L)) as [`Self::push_line`] would record
+    /// them, and leaves in [`Self::candidates`] the edge offsets, increasing, of at least every
+    /// edge within `near` px of the contour point (on the fast path only those at integer
+    /// offsets |k| ≤ ⌊`near` + ½⌋, which are all that can lie within `near`; on the general
+    /// path all). Wu's likelihoods need no more.
+    #[inline]
+    pub(crate) fn count_edges(
+        &mut self,
+        image: &GreyView<'_>,
+        i: usize,
+        near: f64,
+    ) -> (f64, usize) {
+        self.edges.clear();
+        let Some(&planned) = self.plan.get(i) else {
+            return (self.length_of(0), 0);
+        };
+        let Some(line) = planned.fast else {
+            let examined = self.append_general(image, planned.centre, planned.normal);
+            return (self.length_of(examined), self.edges.len());
+        };
+        let examined = self.settings.length + 1;
+        if !self.enough(examined) {
+            return (self.length_of(0), 0);
+        }
+        let half = self.settings.half_length() as i64;
+        let mask = self.scan.mask(line);
+        // Bits j ↔ offsets j − half; |k| ≤ kn ↔ j ∈ [half − kn, half + kn].
+        let kn = ((near + 0.5).floor().max(-1.0) as i64).min(half);
+        let mut near_mask = if kn < 0 {
+            0
+        } else {
+            let width = 2 * kn + 1;
+            let ones = if width >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << width) - 1
+            };
+            (ones << (half - kn)) & mask
+        };
+        while near_mask != 0 {
+            self.edges
+                .push(self.scan.offset(line, near_mask.trailing_zeros()));
+            near_mask &= near_mask - 1;
+        }
+        (self.length_of(examined), mask.count_ones() as usize)
+    }
+
+    /// The edge offsets left by [`Self::count_edges`].
+    #[inline]
+    pub(crate) fn candidates(&self) -> &[f64] {
+        &self.edges
     }
 
     /// Whether `examined` offsets make a line observed.
@@ -230,6 +419,52 @@ impl MeasurementLines {
         normal: Option<Vector2<f64>>,
         search: usize,
     ) -> f64 {
+        let search = search.min(self.settings.half_length()) as i64;
+        match self.scan_one(image, centre, normal, -search, search) {
+            Some(line) => self.nearest_fast(line),
+            None => self.nearest_general(image, centre, normal, search),
+        }
+    }
+
+    /// [`Self::nearest_edge_sq`] of line `i` of the last [`Self::scan_lines`], which must have
+    /// scanned the candidates −`search` ..= `search` (`search` ≤ L/2).
+    #[inline]
+    pub(crate) fn nearest_planned(&mut self, image: &GreyView<'_>, i: usize, search: i64) -> f64 {
+        match self.plan.get(i) {
+            Some(&Planned {
+                fast: Some(line), ..
+            }) => self.nearest_fast(line),
+            Some(&Planned { centre, normal, .. }) => {
+                self.nearest_general(image, centre, normal, search)
+            }
+            None => f64::INFINITY,
+        }
+    }
+
+    /// The nearest edge of a fast line: min z² over its mask.
+    #[inline]
+    fn nearest_fast(&self, line: usize) -> f64 {
+        if !self.enough(self.settings.length + 1) {
+            return f64::INFINITY;
+        }
+        let mut best = f64::INFINITY;
+        let mut mask = self.scan.mask(line);
+        while mask != 0 {
+            let z = self.scan.offset(line, mask.trailing_zeros());
+            best = best.min(z * z);
+            mask &= mask - 1;
+        }
+        best
+    }
+
+    /// [`Self::nearest_edge_sq`] on the general path (`search` ≤ L/2).
+    fn nearest_general(
+        &mut self,
+        image: &GreyView<'_>,
+        centre: Vector2<f64>,
+        normal: Option<Vector2<f64>>,
+        search: i64,
+    ) -> f64 {
         let Some(n) = normal.filter(|_| centre.x.is_finite() && centre.y.is_finite()) else {
             return f64::INFINITY;
         };
@@ -248,14 +483,12 @@ impl MeasurementLines {
         if !self.enough(examined) {
             return f64::INFINITY;
         }
-        let search = search.min(half as usize) as i64;
         let (clo, chi) = (klo.max(-search), khi.min(search));
         if chi < clo {
             return f64::INFINITY;
         }
         // Samples at clo − 1 − r ..= chi + 1 + r (samples[k − s_lo]), derivatives at
-        // clo − 1 ..= chi + 1, in one run. (Sampling |k| ≤ 2 first and stopping when an edge is
-        // there measured slower on the benchmark: the second run costs more than it saves.)
+        // clo − 1 ..= chi + 1, in one run.
         let (s_lo, s_hi) = (clo - 1 - r, chi + 1 + r);
         self.samples.resize((s_hi - s_lo + 1) as usize, 0.0);
         image.sample_line(
