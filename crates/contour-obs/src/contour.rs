@@ -166,6 +166,32 @@ impl Contour {
         let normal = (det != 0.0 && len > 1e-12 && len.is_finite()).then(|| m / len);
         (p, normal)
     }
+
+    /// [`Self::pose_point`] for every point, into `out` (resized to n): the image point and the
+    /// outward unit normal, with (NaN, NaN) for an undefined normal. The same arithmetic as
+    /// `pose_point`, bit for bit, written as one branch-free loop so that the square roots
+    /// and divisions of consecutive points overlap.
+    pub(crate) fn pose_all(&self, pose: &Affine2, out: &mut Vec<(Vector2<f64>, Vector2<f64>)>) {
+        let a = &pose.a;
+        let det = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(1, 0)];
+        let sign = det.signum();
+        out.resize(self.points.len(), (Vector2::zeros(), Vector2::zeros()));
+        for ((o, r), n) in out.iter_mut().zip(&self.points).zip(&self.normals) {
+            let p = pose.apply(*r);
+            let m = Vector2::new(
+                a[(1, 1)] * n.x - a[(1, 0)] * n.y,
+                -a[(0, 1)] * n.x + a[(0, 0)] * n.y,
+            ) * sign;
+            let len = (m.x * m.x + m.y * m.y).sqrt();
+            let defined = det != 0.0 && len > 1e-12 && len.is_finite();
+            let normal = if defined {
+                m / len
+            } else {
+                Vector2::new(f64::NAN, f64::NAN)
+            };
+            *o = (p, normal);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -99,6 +99,8 @@ pub struct MeasurementLines {
     /// in it after [`Self::scan_lines`].
     scan: LineScan,
     plan: Vec<Planned>,
+    /// The posed contour points and normals ((NaN, NaN): undefined), [`Contour::pose_all`].
+    posed: Vec<(Vector2<f64>, Vector2<f64>)>,
 }
 
 /// One line of [`MeasurementLines::scan_lines`]: where it is, and its index in the fast scan
@@ -135,6 +137,7 @@ impl MeasurementLines {
             edges: Vec::with_capacity(4 * n),
             scan: LineScan::default(),
             plan: Vec::with_capacity(n),
+            posed: Vec::with_capacity(n),
         })
     }
 
@@ -229,8 +232,10 @@ impl MeasurementLines {
     ) {
         self.plan.clear();
         let fits = self.scan.begin(&self.detector, klo, khi, contour.len());
+        contour.pose_all(pose, &mut self.posed);
         for i in 0..contour.len() {
-            let (centre, normal) = contour.pose_point(pose, i);
+            let (centre, normal) = self.posed[i];
+            let normal = (!normal.x.is_nan()).then_some(normal);
             let fast = if fits {
                 self.plan_fast(image, centre, normal)
             } else {

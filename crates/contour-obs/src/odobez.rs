@@ -236,16 +236,21 @@ where
             Ok(())
         }
         Batch::Parallel(lines) => {
+            // One workspace per rayon job (a few per thread, not one per chunk): its scan
+            // buffers are allocated on first use.
             let results: Vec<Result<()>> = out
                 .par_chunks_mut(PAR_CHUNK)
                 .enumerate()
-                .map(|(chunk, o)| {
-                    let mut ws = MeasurementLines::new(lines)?;
-                    for (j, v) in o.iter_mut().enumerate() {
-                        *v = one(&mut ws, chunk * PAR_CHUNK + j)?;
-                    }
-                    Ok(())
-                })
+                .map_init(
+                    || MeasurementLines::new(lines),
+                    |ws, (chunk, o)| {
+                        let ws = ws.as_mut().map_err(|e| e.clone())?;
+                        for (j, v) in o.iter_mut().enumerate() {
+                            *v = one(ws, chunk * PAR_CHUNK + j)?;
+                        }
+                        Ok(())
+                    },
+                )
                 .collect();
             results.into_iter().collect()
         }

@@ -57,9 +57,8 @@ pub(crate) struct LineScan {
     bottom: Vec<f32>,
     /// Samples.
     s: Vec<f32>,
-    /// Filter responses (entry i is centred on sample i + r) and |d|.
+    /// Filter responses (entry i is centred on sample i + r).
     d: Vec<f32>,
-    a: Vec<f32>,
     /// Edge flags (0 or 1); candidate j of a line is its response j + 1.
     flag: Vec<u8>,
     /// The edge mask of each line after [`Self::finish`].
@@ -101,13 +100,7 @@ impl LineScan {
         if self.s.len() < len {
             self.top.resize(2 * len, 0.0);
             self.bottom.resize(2 * len, 0.0);
-            for v in [
-                &mut self.fx,
-                &mut self.fy,
-                &mut self.s,
-                &mut self.d,
-                &mut self.a,
-            ] {
+            for v in [&mut self.fx, &mut self.fy, &mut self.s, &mut self.d] {
                 v.resize(len, 0.0);
             }
             self.off.resize(len, 0);
@@ -202,10 +195,7 @@ impl LineScan {
         // Responses and |d|; suppression reads two entries past each candidate.
         let responses = total + BLOCK;
         respond(det.taps(), &self.s, &mut self.d[..responses]);
-        for (a, d) in self.a[..responses].iter_mut().zip(&self.d[..responses]) {
-            *a = d.abs();
-        }
-        flags(det, &self.a, &self.d, &mut self.flag[..total]);
+        flags(det, &self.d, &mut self.flag[..total]);
         self.masks.clear();
         let keep = if self.candidates >= 64 {
             u64::MAX
@@ -246,8 +236,8 @@ impl LineScan {
     #[inline]
     pub(crate) fn offset(&self, line: usize, j: u32) -> f64 {
         let i = line * self.stride + j as usize;
-        let (am, a0, ap) = match self.a.get(i..i + 3) {
-            Some(&[am, a0, ap]) => (am, a0, ap),
+        let (am, a0, ap) = match self.d.get(i..i + 3) {
+            Some(&[dm, d0, dp]) => (dm.abs(), d0.abs(), dp.abs()),
             _ => (0.0, 0.0, 0.0),
         };
         (self.klo + i64::from(j)) as f64 + f64::from(EdgeDetector::vertex(am, a0, ap))
@@ -350,19 +340,17 @@ fn respond(taps: &[f32], s: &[f32], d: &mut [f32]) {
 }
 
 /// `flag[j]` = whether response j + 1 is an edge: polarity, threshold and non-maximum
-/// suppression as [`EdgeDetector::peak`]. Needs `flag.len() + 2 ≤ a.len(), d.len()`.
+/// suppression on |d| as [`EdgeDetector::peak`]. Needs `flag.len() + 2 ≤ d.len()`.
 #[inline(always)]
-fn flags(det: &EdgeDetector, a: &[f32], d: &[f32], flag: &mut [u8]) {
+fn flags(det: &EdgeDetector, d: &[f32], flag: &mut [u8]) {
     let (sign, any) = det.polarity_test();
     let threshold = det.settings().threshold;
     let n = flag.len();
-    let (am, a0, ap, d0) = (&a[..n], &a[1..n + 1], &a[2..n + 2], &d[1..n + 1]);
+    let (dm, d0, dp) = (&d[..n], &d[1..n + 1], &d[2..n + 2]);
     for j in 0..n {
+        let (am, a0, ap) = (dm[j].abs(), d0[j].abs(), dp[j].abs());
         // The asymmetric comparison keeps one sample of a plateau.
-        let edge = (any | (d0[j] * sign > 0.0))
-            & (a0[j] >= threshold)
-            & (a0[j] >= am[j])
-            & (a0[j] > ap[j]);
+        let edge = (any | (d0[j] * sign > 0.0)) & (a0 >= threshold) & (a0 >= am) & (a0 > ap);
         flag[j] = u8::from(edge);
     }
 }
