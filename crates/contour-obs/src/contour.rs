@@ -223,6 +223,35 @@ mod tests {
     }
 
     #[test]
+    fn pose_all_equals_pose_point_bit_for_bit() {
+        let spline =
+            Template::ClosedBSpline(vec![[1.0, 0.2], [0.1, 1.3], [-1.2, 0.0], [0.0, -0.9]]);
+        let poses = [
+            Affine2::from_ellipse(5.0, 6.0, 9.0, 4.0, 0.7),
+            Affine2::from_wu([1.3, -0.4, 0.2, -0.8, 3.0, -2.0]),
+            // Singular: no normals.
+            Affine2::from_wu([1.0, 2.0, 2.0, 4.0, 0.0, 0.0]),
+            Affine2::from_wu([1e-20, 0.0, 0.0, 1e-20, 1.0, 1.0]),
+        ];
+        let mut out = Vec::new();
+        for template in [Template::UnitCircle, spline] {
+            let c = Contour::new(&template, 13).unwrap();
+            for pose in &poses {
+                c.pose_all(pose, &mut out);
+                assert_eq!(out.len(), c.len());
+                for (i, (p, n)) in out.iter().enumerate() {
+                    let (want_p, want_n) = c.pose_point(pose, i);
+                    assert_eq!(*p, want_p);
+                    match want_n {
+                        Some(want) => assert_eq!(*n, want),
+                        None => assert!(n.x.is_nan() && n.y.is_nan()),
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn singular_pose_has_no_normal() {
         let pose = Affine2::from_wu([1.0, 2.0, 2.0, 4.0, 0.0, 0.0]);
         assert!(Contour::unit_circle(8).pose_point(&pose, 1).1.is_none());

@@ -376,7 +376,12 @@ impl MeasurementLines {
         let half = self.settings.half_length() as i64;
         let mask = self.scan.mask(line);
         // Bits j ↔ offsets j − half; |k| ≤ kn ↔ j ∈ [half − kn, half + kn].
-        let kn = ((near + 0.5).floor().max(-1.0) as i64).min(half);
+        // ⌊near + ½⌋ by truncation (a libm call otherwise on baseline x86-64).
+        let kn = if near + 0.5 >= 0.0 {
+            ((near + 0.5) as i64).min(half)
+        } else {
+            -1
+        };
         let mut near_mask = if kn < 0 {
             0
         } else {
@@ -618,6 +623,141 @@ fn inside_interval(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::{Polarity, Template};
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64Mcg;
+
+    /// Random grey discs on mid-grey: edges of every strength, many near the threshold.
+    fn cluttered(rng: &mut Pcg64Mcg, w: usize, h: usize) -> Vec<f32> {
+        let mut img = vec![110.0f32; w * h];
+        for _ in 0..w * h / 60 {
+            let (cx, cy, r): (f64, f64, f64) = (
+                rng.random_range(0.0..w as f64),
+                rng.random_range(0.0..h as f64),
+                rng.random_range(1.5..7.0),
+            );
+            let g = rng.random_range(0.0..255.0) as f32;
+            for y in 0..h {
+                for x in 0..w {
+                    let (dx, dy) = (x as f64 - cx, y as f64 - cy);
+                    if dx * dx + dy * dy <= r * r {
+                        img[y * w + x] = g;
+                    }
+                }
+            }
+        }
+        img
+    }
+
+    /// The line settings the fast scan is checked under: the default, a wider filter (σ = 1.7,
+    /// radius 6, the general tap loop), long lines (L = 50: 61 samples, near the scan's cap),
+    /// lines too long for the scan (L = 60: the general path only), each polarity, a low
+    /// threshold, and a strict observed fraction.
+    fn settings_under_test() -> Vec<LineSettings> {
+        let d = LineSettings::default();
+        let edge = |sigma, threshold, polarity| EdgeSettings {
+            sigma,
+            threshold,
+            polarity,
+        };
+        vec![
+            d,
+            LineSettings {
+                edge: edge(1.7, 8.0, Polarity::Any),
+                ..d
+            },
+            LineSettings { length: 50, ..d },
+            LineSettings { length: 60, ..d },
+            LineSettings {
+                edge: edge(1.0, 8.0, Polarity::Rising),
+                ..d
+            },
+            LineSettings {
+                edge: edge(1.0, 3.0, Polarity::Falling),
+                min_observed_fraction: 1.0,
+                ..d
+            },
+        ]
+    }
+
+    #[test]
+    fn fast_scan_equals_the_general_path_bit_for_bit() {
+        // Every line of random poses (many reaching over the border or wholly outside) through
+        // extract (the batched fast scan where a line is wholly inside), push_line (the scan
+        // of one line), nearest_edge_sq and count_edges, against the general path
+        // (inside_interval, sample_line, EdgeDetector) on the same line: the same samples and
+        // arithmetic, so the same edges to the bit and the same observed length.
+        let mut rng = Pcg64Mcg::seed_from_u64(21);
+        let (w, h) = (150, 110);
+        let data = cluttered(&mut rng, w, h);
+        let image = GreyView::new(w, h, &data).unwrap();
+        let (mut fast_lines, mut edges) = (0usize, 0usize);
+        for settings in settings_under_test() {
+            let settings = LineSettings {
+                n_lines: 24,
+                ..settings
+            };
+            let contour = Contour::new(&Template::UnitCircle, settings.n_lines).unwrap();
+            let mut ws = MeasurementLines::new(&settings).unwrap();
+            let mut single = MeasurementLines::new(&settings).unwrap();
+            let mut general = MeasurementLines::new(&settings).unwrap();
+            let half = settings.half_length();
+            for _ in 0..150 {
+                let pose = Affine2::from_ellipse(
+                    rng.random_range(-10.0..160.0),
+                    rng.random_range(-10.0..120.0),
+                    rng.random_range(5.0..45.0),
+                    rng.random_range(5.0..45.0),
+                    rng.random_range(-3.2..3.2),
+                );
+                ws.extract(&image, &contour, &pose).unwrap();
+                fast_lines += ws.plan.iter().filter(|p| p.fast.is_some()).count();
+                single.clear();
+                for i in 0..contour.len() {
+                    let (c, n) = (ws.plan[i].centre, ws.plan[i].normal);
+                    general.clear();
+                    let examined = general.append_general(&image, c, n);
+                    let want = &general.edges[..];
+                    assert_eq!(ws.edges(i), want, "extract, line {i}");
+                    assert_eq!(ws.observed_length(i), general.length_of(examined));
+                    single.push_line(&image, c, n);
+                    assert_eq!(single.edges(i), want, "push_line, line {i}");
+                    assert_eq!(single.observed_length(i), ws.observed_length(i));
+                    edges += want.len();
+                    for search in [0, 2, 4, half] {
+                        let want = general.nearest_general(&image, c, n, search as i64);
+                        let got = general.nearest_edge_sq(&image, c, n, search);
+                        assert_eq!(got.to_bits(), want.to_bits(), "nearest, search {search}");
+                    }
+                }
+                // Wu's counting path: the count and, in the window, the same offsets.
+                let near = 4.0;
+                ws.scan_lines(&image, &contour, &pose, -(half as i64), half as i64);
+                for i in 0..contour.len() {
+                    let (c, n) = (ws.plan[i].centre, ws.plan[i].normal);
+                    general.clear();
+                    let examined = general.append_general(&image, c, n);
+                    let (length, m) = ws.count_edges(&image, i, near);
+                    assert_eq!(
+                        (length, m),
+                        (general.length_of(examined), general.edges.len())
+                    );
+                    let in_window = |e: &&f64| e.abs() <= near;
+                    assert!(
+                        ws.candidates()
+                            .iter()
+                            .filter(in_window)
+                            .eq(general.edges.iter().filter(in_window))
+                    );
+                }
+            }
+        }
+        // The comparison covers many lines on the fast path, and enough edges.
+        assert!(
+            fast_lines > 5_000 && edges > 20_000,
+            "{fast_lines} fast lines, {edges} edges"
+        );
+    }
 
     #[test]
     fn vertical_step_seen_by_horizontal_lines() {

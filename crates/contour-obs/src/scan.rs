@@ -77,6 +77,8 @@ impl LineScan {
         khi: i64,
         max_lines: usize,
     ) -> bool {
+        self.lines = 0;
+        self.masks.clear();
         let r = det.radius();
         let Ok(candidates) = usize::try_from(khi - klo + 1) else {
             return false;
@@ -95,7 +97,6 @@ impl LineScan {
             self.radius,
             self.stride,
         ) = (klo, candidates, count, r, stride);
-        self.lines = 0;
         let len = max_lines * stride + SLACK;
         if self.s.len() < len {
             self.top.resize(2 * len, 0.0);
@@ -182,6 +183,9 @@ impl LineScan {
     /// Interpolates, filters and suppresses all lines added, leaving one edge mask per line:
     /// [`Self::mask`].
     pub(crate) fn finish(&mut self, det: &EdgeDetector) {
+        if self.lines == 0 {
+            return;
+        }
         let total = self.lines * self.stride;
         // Samples; the filter reads up to 2r entries past each response.
         let samples = total + 2 * self.radius + BLOCK;
