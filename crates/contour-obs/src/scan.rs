@@ -145,8 +145,10 @@ impl LineScan {
         }
         let line = self.lines;
         let at = line * self.stride;
-        let whole = at..at + self.stride;
-        if self.s.len() < whole.end + SLACK {
+        // Whole vectors: the entries past this line's belong to the next line (which
+        // rewrites them) or to the slack.
+        let whole = at..at + self.stride.next_multiple_of(BLOCK);
+        if self.s.len() < at + self.stride + SLACK {
             return None;
         }
         // Positions relative to the first sample's cell: the fraction bits are those of the
