@@ -285,16 +285,25 @@ fn gather(
 ) {
     let n = off.len();
     let (top, bottom) = (&mut top[..2 * n], &mut bottom[..2 * n]);
-    for ((o, t), b) in off
-        .iter()
-        .zip(top.chunks_exact_mut(2))
-        .zip(bottom.chunks_exact_mut(2))
-    {
-        let i = base.wrapping_add_signed(*o as isize);
+    let cell = |o: i32| {
+        let i = base.wrapping_add_signed(o as isize);
         // One bounds check for the 2×2 cell.
         let quad = &data[i..i + width + 2];
-        t.copy_from_slice(&quad[..2]);
-        b.copy_from_slice(&quad[width..]);
+        ([quad[0], quad[1]], [quad[width], quad[width + 1]])
+    };
+    // Two samples per iteration.
+    let (pairs, rest) = off.as_chunks::<2>();
+    let (top2, top1) = top.as_chunks_mut::<4>();
+    let (bottom2, bottom1) = bottom.as_chunks_mut::<4>();
+    for ((&[o0, o1], t), b) in pairs.iter().zip(top2).zip(bottom2) {
+        let ((t0, b0), (t1, b1)) = (cell(o0), cell(o1));
+        *t = [t0[0], t0[1], t1[0], t1[1]];
+        *b = [b0[0], b0[1], b1[0], b1[1]];
+    }
+    if let (Some(&o), true, true) = (rest.first(), top1.len() == 2, bottom1.len() == 2) {
+        let (t, b) = cell(o);
+        top1.copy_from_slice(&t);
+        bottom1.copy_from_slice(&b);
     }
 }
 
