@@ -145,9 +145,9 @@ impl LineScan {
         }
         let line = self.lines;
         let at = line * self.stride;
-        // Whole vectors: the entries past this line's belong to the next line (which
+        // Whole SSE vectors: the entries past this line's belong to the next line (which
         // rewrites them) or to the slack.
-        let whole = at..at + self.stride.next_multiple_of(BLOCK);
+        let whole = at..at + self.stride.next_multiple_of(4);
         if self.s.len() < at + self.stride + SLACK {
             return None;
         }
