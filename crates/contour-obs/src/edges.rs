@@ -224,17 +224,6 @@ impl EdgeDetector {
         delta.clamp(-0.5, 0.5)
     }
 
-    /// The polarity as a branch-free test: an edge's response d must satisfy
-    /// `any || d * sign > 0`.
-    #[inline]
-    pub(crate) fn polarity_test(&self) -> (f32, bool) {
-        match self.settings.polarity {
-            Polarity::Any => (1.0, true),
-            Polarity::Rising => (1.0, false),
-            Polarity::Falling => (-1.0, false),
-        }
-    }
-
     /// Taps w_1 … w_r of the antisymmetric filter.
     #[inline]
     pub(crate) fn taps(&self) -> &[f32] {

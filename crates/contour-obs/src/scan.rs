@@ -16,7 +16,7 @@
 //! stores read back as vectors), which would stall the processor's store forwarding.
 
 use crate::image::FIX_BITS;
-use crate::{EdgeDetector, GreyView};
+use crate::{EdgeDetector, GreyView, Polarity};
 
 /// The most samples per line a scan takes; longer lines take the general path. 64 covers the
 /// default lines (29 samples) and any line up to L = 56 px at σ = 1 px.
@@ -335,11 +335,9 @@ fn respond(taps: &[f32], s: &[f32], d: &mut [f32]) {
         let (p2, m2) = (&s[5..5 + m], &s[1..1 + m]);
         let (p3, m3) = (&s[6..6 + m], &s[..m]);
         for i in 0..m {
-            let mut v = 0.0f32;
-            v += w1 * (p1[i] - m1[i]);
-            v += w2 * (p2[i] - m2[i]);
-            v += w3 * (p3[i] - m3[i]);
-            d[i] = v;
+            // The general path sums from 0.0, which differs only in the sign of a zero
+            // response: nothing downstream (|d|, d > 0, d < 0) can tell.
+            d[i] = w1 * (p1[i] - m1[i]) + w2 * (p2[i] - m2[i]) + w3 * (p3[i] - m3[i]);
         }
     } else {
         let r = taps.len();
@@ -358,14 +356,23 @@ fn respond(taps: &[f32], s: &[f32], d: &mut [f32]) {
 /// suppression on |d| as [`EdgeDetector::peak`]. Needs `flag.len() + 2 ≤ d.len()`.
 #[inline(always)]
 fn flags(det: &EdgeDetector, d: &[f32], flag: &mut [u8]) {
-    let (sign, any) = det.polarity_test();
+    // The polarity test as a loop-invariant closure, so that `Any` costs nothing.
     let threshold = det.settings().threshold;
+    match det.settings().polarity {
+        Polarity::Any => flags_with(d, flag, threshold, |_| true),
+        Polarity::Rising => flags_with(d, flag, threshold, |d| d > 0.0),
+        Polarity::Falling => flags_with(d, flag, threshold, |d| d < 0.0),
+    }
+}
+
+#[inline(always)]
+fn flags_with(d: &[f32], flag: &mut [u8], threshold: f32, keep: impl Fn(f32) -> bool) {
     let n = flag.len();
     let (dm, d0, dp) = (&d[..n], &d[1..n + 1], &d[2..n + 2]);
     for j in 0..n {
         let (am, a0, ap) = (dm[j].abs(), d0[j].abs(), dp[j].abs());
         // The asymmetric comparison keeps one sample of a plateau.
-        let edge = (any | (d0[j] * sign > 0.0)) & (a0 >= threshold) & (a0 >= am) & (a0 > ap);
+        let edge = keep(d0[j]) & (a0 >= threshold) & (a0 >= am) & (a0 > ap);
         flag[j] = u8::from(edge);
     }
 }
