@@ -99,6 +99,9 @@ pub struct MeasurementLines {
     /// in it after [`Self::scan_lines`].
     scan: LineScan,
     plan: Vec<Planned>,
+    /// Whether a line examined over all its L + 1 offsets is observed (always, unless the
+    /// observed fraction exceeds 1, which validation rejects): `enough(L + 1)`, once.
+    whole_observed: bool,
     /// The posed contour points and normals ((NaN, NaN): undefined), [`Contour::pose_all`].
     posed: Vec<(Vector2<f64>, Vector2<f64>)>,
 }
@@ -124,7 +127,10 @@ impl MeasurementLines {
         let n = settings.n_lines;
         let mut starts = Vec::with_capacity(n + 1);
         starts.push(0);
+        let needed = settings.min_observed_fraction * settings.length.saturating_add(1) as f64;
+        let whole_observed = (settings.length + 1) as f64 >= needed;
         Ok(Self {
+            whole_observed,
             settings: *settings,
             detector,
             reach,
@@ -295,7 +301,7 @@ impl MeasurementLines {
     /// examined: all L + 1 of a line wholly inside.
     fn append_fast(&mut self, line: usize) -> usize {
         let examined = self.settings.length + 1;
-        if !self.enough(examined) {
+        if !self.whole_observed {
             return 0;
         }
         let mut mask = self.scan.mask(line);
@@ -370,7 +376,7 @@ impl MeasurementLines {
             return (self.length_of(examined), self.edges.len());
         };
         let examined = self.settings.length + 1;
-        if !self.enough(examined) {
+        if !self.whole_observed {
             return (self.length_of(0), 0);
         }
         let half = self.settings.half_length() as i64;
@@ -454,7 +460,7 @@ impl MeasurementLines {
     /// The nearest edge of a fast line: min z² over its mask.
     #[inline]
     fn nearest_fast(&self, line: usize) -> f64 {
-        if !self.enough(self.settings.length + 1) {
+        if !self.whole_observed {
             return f64::INFINITY;
         }
         let mut best = f64::INFINITY;
