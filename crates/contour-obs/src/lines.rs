@@ -99,11 +99,41 @@ pub struct MeasurementLines {
     /// in it after [`Self::scan_lines`].
     scan: LineScan,
     plan: Vec<Planned>,
+    /// [`LineBounds::holds`] of each posed line.
+    inside: Vec<bool>,
     /// Whether a line examined over all its L + 1 offsets is observed (always, unless the
     /// observed fraction exceeds 1, which validation rejects): `enough(L + 1)`, once.
     whole_observed: bool,
     /// The posed contour points and normals ((NaN, NaN): undefined), [`Contour::pose_all`].
     posed: Vec<(Vector2<f64>, Vector2<f64>)>,
+}
+
+/// Whether a line lies wholly inside the image: both end points c ± reach·n in
+/// [0, w − 1] × [0, h − 1], the test `inside_interval` starts with (so that the fast and the
+/// general path agree on which lines are wholly inside; a segment is inside when its end points
+/// are). False for non-finite centres or normals.
+#[derive(Debug, Clone, Copy)]
+struct LineBounds {
+    reach: f64,
+    xmax: f64,
+    ymax: f64,
+}
+
+impl LineBounds {
+    /// Branch-free, so that a pass over many lines vectorises.
+    #[inline(always)]
+    fn holds(&self, c: Vector2<f64>, n: Vector2<f64>) -> bool {
+        let r = self.reach;
+        let (x0, y0, x1, y1) = (c.x - r * n.x, c.y - r * n.y, c.x + r * n.x, c.y + r * n.y);
+        (x0 >= 0.0)
+            & (x0 <= self.xmax)
+            & (y0 >= 0.0)
+            & (y0 <= self.ymax)
+            & (x1 >= 0.0)
+            & (x1 <= self.xmax)
+            & (y1 >= 0.0)
+            & (y1 <= self.ymax)
+    }
 }
 
 /// One line of [`MeasurementLines::scan_lines`]: where it is, and its index in the fast scan
@@ -131,6 +161,7 @@ impl MeasurementLines {
         let whole_observed = (settings.length + 1) as f64 >= needed;
         Ok(Self {
             whole_observed,
+            inside: Vec::with_capacity(n),
             settings: *settings,
             detector,
             reach,
@@ -239,13 +270,19 @@ impl MeasurementLines {
         self.plan.clear();
         let fits = self.scan.begin(&self.detector, klo, khi, contour.len());
         contour.pose_all(pose, &mut self.posed);
+        // The end-point test of every line in one branch-free pass, then the lines.
+        let bounds = self.bounds(image);
+        self.inside.clear();
+        self.inside
+            .extend(self.posed.iter().map(|&(c, n)| bounds.holds(c, n)));
         for i in 0..contour.len() {
             let (centre, normal) = self.posed[i];
             let normal = (!normal.x.is_nan()).then_some(normal);
-            let fast = if fits {
-                self.plan_fast(image, centre, normal)
-            } else {
-                None
+            let fast = match normal {
+                Some(n) if fits && self.inside[i] => {
+                    self.scan.push(image, (centre.x, centre.y), (n.x, n.y))
+                }
+                _ => None,
             };
             self.plan.push(Planned {
                 centre,
@@ -273,9 +310,8 @@ impl MeasurementLines {
         Some(line)
     }
 
-    /// Adds the line to the fast scan when it lies wholly inside the image: the test on the
-    /// end points ±reach is the one `inside_interval` starts with, so both paths agree on
-    /// which lines are wholly inside; [`LineScan::push`] then checks the fixed-point positions.
+    /// Adds the line to the fast scan when it lies wholly inside the image ([`LineBounds`]);
+    /// [`LineScan::push`] then checks the fixed-point positions.
     #[inline]
     fn plan_fast(
         &mut self,
@@ -283,18 +319,21 @@ impl MeasurementLines {
         c: Vector2<f64>,
         normal: Option<Vector2<f64>>,
     ) -> Option<usize> {
-        let n = normal.filter(|_| c.x.is_finite() && c.y.is_finite())?;
-        let r = self.reach as f64;
-        let (xmax, ymax) = ((image.width() - 1) as f64, (image.height() - 1) as f64);
-        let (x0, y0, x1, y1) = (c.x - r * n.x, c.y - r * n.y, c.x + r * n.x, c.y + r * n.y);
-        let inside = (0.0..=xmax).contains(&x0)
-            && (0.0..=ymax).contains(&y0)
-            && (0.0..=xmax).contains(&x1)
-            && (0.0..=ymax).contains(&y1);
-        if !inside {
+        let n = normal?;
+        if !self.bounds(image).holds(c, n) {
             return None;
         }
         self.scan.push(image, (c.x, c.y), (n.x, n.y))
+    }
+
+    /// The end-point test of lines on `image`.
+    #[inline]
+    fn bounds(&self, image: &GreyView<'_>) -> LineBounds {
+        LineBounds {
+            reach: self.reach as f64,
+            xmax: (image.width() - 1) as f64,
+            ymax: (image.height() - 1) as f64,
+        }
     }
 
     /// Appends the edges of fast line `line` (candidates −L/2 ..= L/2) and returns the offsets
