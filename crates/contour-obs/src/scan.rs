@@ -116,7 +116,7 @@ impl LineScan {
     /// points do, positions being linear in k. Positions are stepped in fixed point exactly as
     /// [`GreyView::sample_line`]'s unclamped loop; relative to the first sample's cell they fit
     /// an i32 (fewer than 64 samples, |n| ≤ 2). At most `max_lines` lines may be added.
-    #[inline(never)]
+    #[inline]
     pub(crate) fn push(
         &mut self,
         image: &GreyView<'_>,
