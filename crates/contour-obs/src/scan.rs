@@ -7,8 +7,8 @@
 //! order), so every edge is the same to the bit; lines that touch the border take the general
 //! path.
 //!
-//! The speed comes from the layout. The lines of a scan are stored one after the other with a
-//! fixed stride. The pixel reads are the only scalar pass, done line by line as the lines are
+//! The speed comes from the layout. The lines of a scan are stored one after the other (structure
+//! of arrays, one entry per sample). The pixel reads are the only scalar pass, done line by line as the lines are
 //! added; interpolation, filter, |d| and suppression then run as single passes over all lines
 //! at once (each entry depends only on entries of its own line), which the compiler vectorises.
 //! Running each pass over all lines, rather than all passes over each line, also means a pass
@@ -20,12 +20,13 @@ use crate::{EdgeDetector, GreyView, Polarity};
 
 /// The most samples per line a scan takes; longer lines take the general path. 64 covers the
 /// default lines (29 samples) and any line up to L = 56 px at σ = 1 px.
-pub(crate) const SCAN_CAP: usize = 64;
+const SCAN_CAP: usize = 64;
 
 /// The largest filter radius a scan takes (⌈3σ⌉ ≤ 30 for σ ≤ 10 px).
 const MAX_RADIUS: usize = 30;
 
-/// Strides are multiples of this many entries (whole vectors).
+/// Eight candidates' flags make one byte-word of the mask gathering; the passes also run this
+/// many entries past the last line, so that they end on whole vectors.
 const BLOCK: usize = 8;
 
 /// Entries past the last line, so that every pass can run over whole blocks and read its
@@ -107,7 +108,6 @@ impl LineScan {
             self.off.resize(len, 0);
             self.flag.resize(len, 0);
         }
-        self.masks.clear();
         true
     }
 
