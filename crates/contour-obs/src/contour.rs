@@ -166,6 +166,32 @@ impl Contour {
         let normal = (det != 0.0 && len > 1e-12 && len.is_finite()).then(|| m / len);
         (p, normal)
     }
+
+    /// [`Self::pose_point`] for every point, into `out` (resized to n): the image point and the
+    /// outward unit normal, with (NaN, NaN) for an undefined normal. The same arithmetic as
+    /// `pose_point`, bit for bit, written as one branch-free loop so that the square roots
+    /// and divisions of consecutive points overlap.
+    pub(crate) fn pose_all(&self, pose: &Affine2, out: &mut Vec<(Vector2<f64>, Vector2<f64>)>) {
+        let a = &pose.a;
+        let det = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(1, 0)];
+        let sign = det.signum();
+        out.resize(self.points.len(), (Vector2::zeros(), Vector2::zeros()));
+        for ((o, r), n) in out.iter_mut().zip(&self.points).zip(&self.normals) {
+            let p = pose.apply(*r);
+            let m = Vector2::new(
+                a[(1, 1)] * n.x - a[(1, 0)] * n.y,
+                -a[(0, 1)] * n.x + a[(0, 0)] * n.y,
+            ) * sign;
+            let len = (m.x * m.x + m.y * m.y).sqrt();
+            let defined = det != 0.0 && len > 1e-12 && len.is_finite();
+            let normal = if defined {
+                m / len
+            } else {
+                Vector2::new(f64::NAN, f64::NAN)
+            };
+            *o = (p, normal);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -191,6 +217,35 @@ mod tests {
                     let g = Vector2::new(u / 81.0, v / 16.0);
                     let g_img = Vector2::new(co * g.x - s * g.y, s * g.x + co * g.y).normalize();
                     assert_relative_eq!(n, g_img, epsilon = 1e-12);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn pose_all_equals_pose_point_bit_for_bit() {
+        let spline =
+            Template::ClosedBSpline(vec![[1.0, 0.2], [0.1, 1.3], [-1.2, 0.0], [0.0, -0.9]]);
+        let poses = [
+            Affine2::from_ellipse(5.0, 6.0, 9.0, 4.0, 0.7),
+            Affine2::from_wu([1.3, -0.4, 0.2, -0.8, 3.0, -2.0]),
+            // Singular: no normals.
+            Affine2::from_wu([1.0, 2.0, 2.0, 4.0, 0.0, 0.0]),
+            Affine2::from_wu([1e-20, 0.0, 0.0, 1e-20, 1.0, 1.0]),
+        ];
+        let mut out = Vec::new();
+        for template in [Template::UnitCircle, spline] {
+            let c = Contour::new(&template, 13).unwrap();
+            for pose in &poses {
+                c.pose_all(pose, &mut out);
+                assert_eq!(out.len(), c.len());
+                for (i, (p, n)) in out.iter().enumerate() {
+                    let (want_p, want_n) = c.pose_point(pose, i);
+                    assert_eq!(*p, want_p);
+                    match want_n {
+                        Some(want) => assert_eq!(*n, want),
+                        None => assert!(n.x.is_nan() && n.y.is_nan()),
+                    }
                 }
             }
         }

@@ -205,17 +205,29 @@ impl EdgeDetector {
         let (am, a0, ap) = (dm.abs(), d.abs(), dp.abs());
         // Non-maximum suppression; the asymmetric comparison keeps one sample of a plateau.
         if keep && a0 >= self.settings.threshold && a0 >= am && a0 > ap {
-            // Vertex of the parabola through the three |derivative| samples.
-            let den = am - 2.0 * a0 + ap;
-            let delta = if den < 0.0 {
-                0.5 * (am - ap) / den
-            } else {
-                0.0
-            };
-            Some(delta.clamp(-0.5, 0.5))
+            Some(Self::vertex(am, a0, ap))
         } else {
             None
         }
+    }
+
+    /// The vertex of the parabola through the three |derivative| samples `am`, `a0`, `ap` of a
+    /// maximum, as a shift from the middle one, clamped to [−0.5, 0.5].
+    #[inline]
+    pub(crate) fn vertex(am: f32, a0: f32, ap: f32) -> f32 {
+        let den = am - 2.0 * a0 + ap;
+        let delta = if den < 0.0 {
+            0.5 * (am - ap) / den
+        } else {
+            0.0
+        };
+        delta.clamp(-0.5, 0.5)
+    }
+
+    /// Taps w_1 … w_r of the antisymmetric filter.
+    #[inline]
+    pub(crate) fn taps(&self) -> &[f32] {
+        &self.taps
     }
 }
 

@@ -18,13 +18,17 @@
 //! Speed (the trackers evaluate hundreds of hypotheses per frame): the edge definition is the
 //! workspace's 1-D one (derivative of Gaussian along the line, see [`EdgeDetector`]), evaluated
 //! cheaply. Line positions are stepped in fixed point (2⁻²⁴ px, no float-to-int conversion per
-//! sample) and lines wholly inside the image are sampled without index clamping; the filter is
-//! one vectorisable pass. [`OdobezLikelihood`] samples only the part of each line where an edge
-//! can beat the floor K (|offset| < σ√(−2 ln K) + ½, 17 of 29 samples by default), with values
-//! equal bit for bit to Eq. 19 on all the line's edges. Wu's terms share the line's Poisson
-//! factor and form the rest of the mixture in the linear domain: at most one `ln` per line.
-//! Each likelihood also has a rayon batch (`log_likelihood_batch_par`), bit-identical to the
-//! sequential one. No per-frame precomputation is needed; the existing signatures are kept.
+//! sample). The lines of a hypothesis that lie wholly inside the image are scanned together:
+//! pixel reads line by line, then interpolation, filter and suppression as single vectorised
+//! passes over all of them, giving one edge bit mask per line; lines over the border take the
+//! general path, and both give the same edges to the bit. [`OdobezLikelihood`] scans only the
+//! part of each line where an edge can beat the floor K (|offset| < σ√(−2 ln K) + ½, 17 of 29
+//! samples by default), with values equal bit for bit to Eq. 19 on all the line's edges. Wu's
+//! likelihoods count each line's edges and form Gaussians only in the window, sharing the
+//! line's Poisson factor and forming the rest of the mixture in the linear domain: at most one
+//! `ln` per line. Each likelihood also has a rayon batch (`log_likelihood_batch_par`),
+//! bit-identical to the sequential one. No per-frame precomputation is needed; the existing
+//! signatures are kept.
 //!
 //! Conventions: x right, y down, pixel (i, j) centred at (i, j); grey images are row-major f32
 //! in 0–255 ([`GreyView`]); a pose maps reference r to image p = A·r + t.
@@ -67,6 +71,7 @@ mod image;
 mod lines;
 mod math;
 mod odobez;
+mod scan;
 mod wu;
 
 pub use affine::{Affine2, BoundingBox, Ellipse};

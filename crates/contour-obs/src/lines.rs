@@ -5,10 +5,16 @@
 //! Sample positions c + k·n are stepped in fixed point (`GreyView::sample_line`): within
 //! ~1e−6 px of the exact positions, so edge offsets agree with per-sample f32 interpolation to
 //! well under 1e−4 px (measured worst 5.5e−5 px, `tests/fast_paths.rs`).
+//!
+//! Lines wholly inside the image go through the batched fast scan ([`crate::scan`]); the
+//! others through the general path (the in-image interval, clamped sampling, the detector).
+//! Both compute the same positions and arithmetic, so they give the same edges to the bit
+//! (`fast_scan_equals_the_general_path_bit_for_bit`).
 
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
+use crate::scan::LineScan;
 use crate::{Affine2, Contour, EdgeDetector, EdgeSettings, Error, GreyView, Result};
 
 /// Geometry of the measurement lines and the edge detector used on them.
@@ -94,6 +100,54 @@ pub struct MeasurementLines {
     /// Line i's edges are `edges[starts[i]..starts[i + 1]]`.
     starts: Vec<usize>,
     edges: Vec<f64>,
+    /// The fast scan of the lines wholly inside the image ([`LineScan`]), and each line's place
+    /// in it after [`Self::scan_lines`].
+    scan: LineScan,
+    plan: Vec<Planned>,
+    /// [`LineBounds::holds`] of each posed line.
+    inside: Vec<bool>,
+    /// Whether a line examined over all its L + 1 offsets is observed (always, unless the
+    /// observed fraction exceeds 1, which validation rejects): `enough(L + 1)`, once.
+    whole_observed: bool,
+    /// The posed contour points and normals ((NaN, NaN): undefined), [`Contour::pose_all`].
+    posed: Vec<(Vector2<f64>, Vector2<f64>)>,
+}
+
+/// Whether a line lies wholly inside the image: both end points c ± reach·n in
+/// [0, w − 1] × [0, h − 1], the test `inside_interval` starts with (so that the fast and the
+/// general path agree on which lines are wholly inside; a segment is inside when its end points
+/// are). False for non-finite centres or normals.
+#[derive(Debug, Clone, Copy)]
+struct LineBounds {
+    reach: f64,
+    xmax: f64,
+    ymax: f64,
+}
+
+impl LineBounds {
+    /// Branch-free, so that a pass over many lines vectorises.
+    #[inline(always)]
+    fn holds(&self, c: Vector2<f64>, n: Vector2<f64>) -> bool {
+        let r = self.reach;
+        let (x0, y0, x1, y1) = (c.x - r * n.x, c.y - r * n.y, c.x + r * n.x, c.y + r * n.y);
+        (x0 >= 0.0)
+            & (x0 <= self.xmax)
+            & (y0 >= 0.0)
+            & (y0 <= self.ymax)
+            & (x1 >= 0.0)
+            & (x1 <= self.xmax)
+            & (y1 >= 0.0)
+            & (y1 <= self.ymax)
+    }
+}
+
+/// One line of [`MeasurementLines::scan_lines`]: where it is, and its index in the fast scan
+/// (`None`: the general path takes it).
+#[derive(Debug, Clone, Copy)]
+struct Planned {
+    centre: Vector2<f64>,
+    normal: Option<Vector2<f64>>,
+    fast: Option<usize>,
 }
 
 impl MeasurementLines {
@@ -108,7 +162,11 @@ impl MeasurementLines {
         let n = settings.n_lines;
         let mut starts = Vec::with_capacity(n + 1);
         starts.push(0);
+        let needed = settings.min_observed_fraction * settings.length.saturating_add(1) as f64;
+        let whole_observed = (settings.length + 1) as f64 >= needed;
         Ok(Self {
+            whole_observed,
+            inside: Vec::with_capacity(n),
             settings: *settings,
             detector,
             reach,
@@ -119,6 +177,9 @@ impl MeasurementLines {
             observed_len: Vec::with_capacity(n),
             starts,
             edges: Vec::with_capacity(4 * n),
+            scan: LineScan::default(),
+            plan: Vec::with_capacity(n),
+            posed: Vec::with_capacity(n),
         })
     }
 
@@ -161,10 +222,16 @@ impl MeasurementLines {
                 got: contour.len(),
             });
         }
+        let half = self.settings.half_length() as i64;
+        self.scan_lines(image, contour, pose, -half, half);
         self.clear();
         for i in 0..contour.len() {
-            let (p, n) = contour.pose_point(pose, i);
-            self.push_line(image, p, n);
+            let planned = self.plan[i];
+            let examined = match planned.fast {
+                Some(line) => self.append_fast(line),
+                None => self.append_general(image, planned.centre, planned.normal),
+            };
+            self.record(planned.centre, planned.normal, examined);
         }
         Ok(())
     }
@@ -178,34 +245,216 @@ impl MeasurementLines {
         normal: Option<Vector2<f64>>,
     ) {
         let half = self.settings.half_length() as i64;
-        let full = self.settings.length as f64;
-        let mut examined = 0usize;
-        let interval = normal
-            .filter(|_| centre.x.is_finite() && centre.y.is_finite())
-            .and_then(|n| inside_interval(image, centre, n, self.reach).map(|iv| (n, iv)));
-        if let Some((n, (lo, hi))) = interval {
-            let len = (hi - lo + 1) as usize;
-            self.samples.resize(len, 0.0);
-            image.sample_line((centre.x, centre.y), (n.x, n.y), lo, hi, &mut self.samples);
-            let before = self.edges.len();
-            examined = self
-                .detector
-                .detect(&self.samples, lo, -half, half, &mut self.edges);
-            if !self.enough(examined) {
-                self.edges.truncate(before);
-                examined = 0;
-            }
-        }
-        let observed = examined > 0;
+        let examined = match self.scan_one(image, centre, normal, -half, half) {
+            Some(line) => self.append_fast(line),
+            None => self.append_general(image, centre, normal),
+        };
+        self.record(centre, normal, examined);
+    }
+
+    /// Records a line whose edges were just appended.
+    fn record(&mut self, centre: Vector2<f64>, normal: Option<Vector2<f64>>, examined: usize) {
         self.centres.push(centre);
         self.normals.push(normal.unwrap_or_else(Vector2::zeros));
-        self.observed.push(observed);
-        self.observed_len.push(if observed {
-            full * examined as f64 / (2 * half + 1) as f64
+        self.observed.push(examined > 0);
+        self.observed_len.push(self.length_of(examined));
+        self.starts.push(self.edges.len());
+    }
+
+    /// Scans the candidates `klo ..= khi` of every line of `contour` under `pose`: the lines
+    /// wholly inside the image in one [`LineScan`], the others marked for the general path.
+    /// Each line's plan is then in `plan`. The pose must be finite.
+    pub(crate) fn scan_lines(
+        &mut self,
+        image: &GreyView<'_>,
+        contour: &Contour,
+        pose: &Affine2,
+        klo: i64,
+        khi: i64,
+    ) {
+        self.plan.clear();
+        let fits = self.scan.begin(&self.detector, klo, khi, contour.len());
+        contour.pose_all(pose, &mut self.posed);
+        // The end-point test of every line in one branch-free pass, then the lines.
+        let bounds = self.bounds(image);
+        self.inside.clear();
+        self.inside
+            .extend(self.posed.iter().map(|&(c, n)| bounds.holds(c, n)));
+        for i in 0..contour.len() {
+            let (centre, normal) = self.posed[i];
+            let normal = (!normal.x.is_nan()).then_some(normal);
+            let fast = match normal {
+                Some(n) if fits && self.inside[i] => {
+                    self.scan.push(image, (centre.x, centre.y), (n.x, n.y))
+                }
+                _ => None,
+            };
+            self.plan.push(Planned {
+                centre,
+                normal,
+                fast,
+            });
+        }
+        self.scan.finish(&self.detector);
+    }
+
+    /// One line through the fast scan alone: its index there, or `None` for the general path.
+    fn scan_one(
+        &mut self,
+        image: &GreyView<'_>,
+        centre: Vector2<f64>,
+        normal: Option<Vector2<f64>>,
+        klo: i64,
+        khi: i64,
+    ) -> Option<usize> {
+        if !self.scan.begin(&self.detector, klo, khi, 1) {
+            return None;
+        }
+        let line = self.plan_fast(image, centre, normal)?;
+        self.scan.finish(&self.detector);
+        Some(line)
+    }
+
+    /// Adds the line to the fast scan when it lies wholly inside the image ([`LineBounds`]);
+    /// [`LineScan::push`] then checks the fixed-point positions.
+    #[inline]
+    fn plan_fast(
+        &mut self,
+        image: &GreyView<'_>,
+        c: Vector2<f64>,
+        normal: Option<Vector2<f64>>,
+    ) -> Option<usize> {
+        let n = normal?;
+        if !self.bounds(image).holds(c, n) {
+            return None;
+        }
+        self.scan.push(image, (c.x, c.y), (n.x, n.y))
+    }
+
+    /// The end-point test of lines on `image`.
+    #[inline]
+    fn bounds(&self, image: &GreyView<'_>) -> LineBounds {
+        LineBounds {
+            reach: self.reach as f64,
+            xmax: (image.width() - 1) as f64,
+            ymax: (image.height() - 1) as f64,
+        }
+    }
+
+    /// Appends the edges of fast line `line` (candidates −L/2 ..= L/2) and returns the offsets
+    /// examined: all L + 1 of a line wholly inside.
+    fn append_fast(&mut self, line: usize) -> usize {
+        let examined = self.settings.length + 1;
+        if !self.whole_observed {
+            return 0;
+        }
+        let mut mask = self.scan.mask(line);
+        while mask != 0 {
+            self.edges
+                .push(self.scan.offset(line, mask.trailing_zeros()));
+            mask &= mask - 1;
+        }
+        examined
+    }
+
+    /// The general path: appends the edges of one line to `edges` (none for an unobserved line)
+    /// and returns how many offsets were examined (0: unobserved).
+    fn append_general(
+        &mut self,
+        image: &GreyView<'_>,
+        centre: Vector2<f64>,
+        normal: Option<Vector2<f64>>,
+    ) -> usize {
+        let Some(n) = normal.filter(|_| centre.x.is_finite() && centre.y.is_finite()) else {
+            return 0;
+        };
+        let Some((lo, hi)) = inside_interval(image, centre, n, self.reach) else {
+            return 0;
+        };
+        let half = self.settings.half_length() as i64;
+        let len = (hi - lo + 1) as usize;
+        self.samples.resize(len, 0.0);
+        image.sample_line((centre.x, centre.y), (n.x, n.y), lo, hi, &mut self.samples);
+        let before = self.edges.len();
+        let examined = self
+            .detector
+            .detect(&self.samples, lo, -half, half, &mut self.edges);
+        if self.enough(examined) {
+            examined
+        } else {
+            self.edges.truncate(before);
+            0
+        }
+    }
+
+    /// The observed length of a line with `examined` offsets examined (0: unobserved, full L).
+    #[inline]
+    fn length_of(&self, examined: usize) -> f64 {
+        let full = self.settings.length as f64;
+        if examined > 0 {
+            full * examined as f64 / (2 * self.settings.half_length() + 1) as f64
         } else {
             full
-        });
-        self.starts.push(self.edges.len());
+        }
+    }
+
+    /// Line `i` of the last [`Self::scan_lines`] (candidates −L/2 ..= L/2) without storing it:
+    /// returns (observed length, number of edges m(L)) as [`Self::push_line`] would record
+    /// them, and leaves in [`Self::candidates`] the edge offsets, increasing, of at least every
+    /// edge within `near` px of the contour point (on the fast path only those at integer
+    /// offsets |k| ≤ ⌊`near` + ½⌋, which are all that can lie within `near`; on the general
+    /// path all). Wu's likelihoods need no more.
+    #[inline]
+    pub(crate) fn count_edges(
+        &mut self,
+        image: &GreyView<'_>,
+        i: usize,
+        near: f64,
+    ) -> (f64, usize) {
+        self.edges.clear();
+        let Some(&planned) = self.plan.get(i) else {
+            return (self.length_of(0), 0);
+        };
+        let Some(line) = planned.fast else {
+            let examined = self.append_general(image, planned.centre, planned.normal);
+            return (self.length_of(examined), self.edges.len());
+        };
+        let examined = self.settings.length + 1;
+        if !self.whole_observed {
+            return (self.length_of(0), 0);
+        }
+        let half = self.settings.half_length() as i64;
+        let mask = self.scan.mask(line);
+        // Bits j ↔ offsets j − half; |k| ≤ kn ↔ j ∈ [half − kn, half + kn].
+        // ⌊near + ½⌋ by truncation (a libm call otherwise on baseline x86-64).
+        let kn = if near + 0.5 >= 0.0 {
+            ((near + 0.5) as i64).min(half)
+        } else {
+            -1
+        };
+        let mut near_mask = if kn < 0 {
+            0
+        } else {
+            let width = 2 * kn + 1;
+            let ones = if width >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << width) - 1
+            };
+            (ones << (half - kn)) & mask
+        };
+        while near_mask != 0 {
+            self.edges
+                .push(self.scan.offset(line, near_mask.trailing_zeros()));
+            near_mask &= near_mask - 1;
+        }
+        (self.length_of(examined), mask.count_ones() as usize)
+    }
+
+    /// The edge offsets left by [`Self::count_edges`].
+    #[inline]
+    pub(crate) fn candidates(&self) -> &[f64] {
+        &self.edges
     }
 
     /// Whether `examined` offsets make a line observed.
@@ -230,6 +479,52 @@ impl MeasurementLines {
         normal: Option<Vector2<f64>>,
         search: usize,
     ) -> f64 {
+        let search = search.min(self.settings.half_length()) as i64;
+        match self.scan_one(image, centre, normal, -search, search) {
+            Some(line) => self.nearest_fast(line),
+            None => self.nearest_general(image, centre, normal, search),
+        }
+    }
+
+    /// [`Self::nearest_edge_sq`] of line `i` of the last [`Self::scan_lines`], which must have
+    /// scanned the candidates −`search` ..= `search` (`search` ≤ L/2).
+    #[inline]
+    pub(crate) fn nearest_planned(&mut self, image: &GreyView<'_>, i: usize, search: i64) -> f64 {
+        match self.plan.get(i) {
+            Some(&Planned {
+                fast: Some(line), ..
+            }) => self.nearest_fast(line),
+            Some(&Planned { centre, normal, .. }) => {
+                self.nearest_general(image, centre, normal, search)
+            }
+            None => f64::INFINITY,
+        }
+    }
+
+    /// The nearest edge of a fast line: min z² over its mask.
+    #[inline]
+    fn nearest_fast(&self, line: usize) -> f64 {
+        if !self.whole_observed {
+            return f64::INFINITY;
+        }
+        let mut best = f64::INFINITY;
+        let mut mask = self.scan.mask(line);
+        while mask != 0 {
+            let z = self.scan.offset(line, mask.trailing_zeros());
+            best = best.min(z * z);
+            mask &= mask - 1;
+        }
+        best
+    }
+
+    /// [`Self::nearest_edge_sq`] on the general path (`search` ≤ L/2).
+    fn nearest_general(
+        &mut self,
+        image: &GreyView<'_>,
+        centre: Vector2<f64>,
+        normal: Option<Vector2<f64>>,
+        search: i64,
+    ) -> f64 {
         let Some(n) = normal.filter(|_| centre.x.is_finite() && centre.y.is_finite()) else {
             return f64::INFINITY;
         };
@@ -248,14 +543,12 @@ impl MeasurementLines {
         if !self.enough(examined) {
             return f64::INFINITY;
         }
-        let search = search.min(half as usize) as i64;
         let (clo, chi) = (klo.max(-search), khi.min(search));
         if chi < clo {
             return f64::INFINITY;
         }
         // Samples at clo − 1 − r ..= chi + 1 + r (samples[k − s_lo]), derivatives at
-        // clo − 1 ..= chi + 1, in one run. (Sampling |k| ≤ 2 first and stopping when an edge is
-        // there measured slower on the benchmark: the second run costs more than it saves.)
+        // clo − 1 ..= chi + 1, in one run.
         let (s_lo, s_hi) = (clo - 1 - r, chi + 1 + r);
         self.samples.resize((s_hi - s_lo + 1) as usize, 0.0);
         image.sample_line(
@@ -380,6 +673,141 @@ fn inside_interval(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::{Polarity, Template};
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64Mcg;
+
+    /// Random grey discs on mid-grey: edges of every strength, many near the threshold.
+    fn cluttered(rng: &mut Pcg64Mcg, w: usize, h: usize) -> Vec<f32> {
+        let mut img = vec![110.0f32; w * h];
+        for _ in 0..w * h / 60 {
+            let (cx, cy, r): (f64, f64, f64) = (
+                rng.random_range(0.0..w as f64),
+                rng.random_range(0.0..h as f64),
+                rng.random_range(1.5..7.0),
+            );
+            let g = rng.random_range(0.0..255.0) as f32;
+            for y in 0..h {
+                for x in 0..w {
+                    let (dx, dy) = (x as f64 - cx, y as f64 - cy);
+                    if dx * dx + dy * dy <= r * r {
+                        img[y * w + x] = g;
+                    }
+                }
+            }
+        }
+        img
+    }
+
+    /// The line settings the fast scan is checked under: the default, a wider filter (σ = 1.7,
+    /// radius 6, the general tap loop), long lines (L = 50: 61 samples, near the scan's cap),
+    /// lines too long for the scan (L = 60: the general path only), each polarity, a low
+    /// threshold, and a strict observed fraction.
+    fn settings_under_test() -> Vec<LineSettings> {
+        let d = LineSettings::default();
+        let edge = |sigma, threshold, polarity| EdgeSettings {
+            sigma,
+            threshold,
+            polarity,
+        };
+        vec![
+            d,
+            LineSettings {
+                edge: edge(1.7, 8.0, Polarity::Any),
+                ..d
+            },
+            LineSettings { length: 50, ..d },
+            LineSettings { length: 60, ..d },
+            LineSettings {
+                edge: edge(1.0, 8.0, Polarity::Rising),
+                ..d
+            },
+            LineSettings {
+                edge: edge(1.0, 3.0, Polarity::Falling),
+                min_observed_fraction: 1.0,
+                ..d
+            },
+        ]
+    }
+
+    #[test]
+    fn fast_scan_equals_the_general_path_bit_for_bit() {
+        // Every line of random poses (many reaching over the border or wholly outside) through
+        // extract (the batched fast scan where a line is wholly inside), push_line (the scan
+        // of one line), nearest_edge_sq and count_edges, against the general path
+        // (inside_interval, sample_line, EdgeDetector) on the same line: the same samples and
+        // arithmetic, so the same edges to the bit and the same observed length.
+        let mut rng = Pcg64Mcg::seed_from_u64(21);
+        let (w, h) = (150, 110);
+        let data = cluttered(&mut rng, w, h);
+        let image = GreyView::new(w, h, &data).unwrap();
+        let (mut fast_lines, mut edges) = (0usize, 0usize);
+        for settings in settings_under_test() {
+            let settings = LineSettings {
+                n_lines: 24,
+                ..settings
+            };
+            let contour = Contour::new(&Template::UnitCircle, settings.n_lines).unwrap();
+            let mut ws = MeasurementLines::new(&settings).unwrap();
+            let mut single = MeasurementLines::new(&settings).unwrap();
+            let mut general = MeasurementLines::new(&settings).unwrap();
+            let half = settings.half_length();
+            for _ in 0..150 {
+                let pose = Affine2::from_ellipse(
+                    rng.random_range(-10.0..160.0),
+                    rng.random_range(-10.0..120.0),
+                    rng.random_range(5.0..45.0),
+                    rng.random_range(5.0..45.0),
+                    rng.random_range(-3.2..3.2),
+                );
+                ws.extract(&image, &contour, &pose).unwrap();
+                fast_lines += ws.plan.iter().filter(|p| p.fast.is_some()).count();
+                single.clear();
+                for i in 0..contour.len() {
+                    let (c, n) = (ws.plan[i].centre, ws.plan[i].normal);
+                    general.clear();
+                    let examined = general.append_general(&image, c, n);
+                    let want = &general.edges[..];
+                    assert_eq!(ws.edges(i), want, "extract, line {i}");
+                    assert_eq!(ws.observed_length(i), general.length_of(examined));
+                    single.push_line(&image, c, n);
+                    assert_eq!(single.edges(i), want, "push_line, line {i}");
+                    assert_eq!(single.observed_length(i), ws.observed_length(i));
+                    edges += want.len();
+                    for search in [0, 2, 4, half] {
+                        let want = general.nearest_general(&image, c, n, search as i64);
+                        let got = general.nearest_edge_sq(&image, c, n, search);
+                        assert_eq!(got.to_bits(), want.to_bits(), "nearest, search {search}");
+                    }
+                }
+                // Wu's counting path: the count and, in the window, the same offsets.
+                let near = 4.0;
+                ws.scan_lines(&image, &contour, &pose, -(half as i64), half as i64);
+                for i in 0..contour.len() {
+                    let (c, n) = (ws.plan[i].centre, ws.plan[i].normal);
+                    general.clear();
+                    let examined = general.append_general(&image, c, n);
+                    let (length, m) = ws.count_edges(&image, i, near);
+                    assert_eq!(
+                        (length, m),
+                        (general.length_of(examined), general.edges.len())
+                    );
+                    let in_window = |e: &&f64| e.abs() <= near;
+                    assert!(
+                        ws.candidates()
+                            .iter()
+                            .filter(in_window)
+                            .eq(general.edges.iter().filter(in_window))
+                    );
+                }
+            }
+        }
+        // The comparison covers many lines on the fast path, and enough edges.
+        assert!(
+            fast_lines > 5_000 && edges > 20_000,
+            "{fast_lines} fast lines, {edges} edges"
+        );
+    }
 
     #[test]
     fn vertical_step_seen_by_horizontal_lines() {

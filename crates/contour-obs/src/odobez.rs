@@ -86,7 +86,7 @@ impl OdobezLikelihood {
         let d_max = settings.sigma * (-2.0 * ln_k).sqrt();
         let search = (d_max - 0.5 + 1e-9)
             .ceil()
-            .clamp(0.0, settings.lines.length as f64) as usize;
+            .clamp(0.0, settings.lines.half_length() as f64) as usize;
         Ok(Self {
             ln_k,
             settings,
@@ -138,10 +138,11 @@ impl OdobezLikelihood {
         }
         ws.clear();
         let (sigma, ln_k) = (self.settings.sigma, self.ln_k);
+        let search = self.search as i64;
+        ws.scan_lines(image, &self.contour, pose, -search, search);
         Ok((0..self.contour.len())
             .map(|i| {
-                let (p, n) = self.contour.pose_point(pose, i);
-                let d2 = ws.nearest_edge_sq(image, p, n, self.search);
+                let d2 = ws.nearest_planned(image, i, search);
                 // As odobez_line_log_term on the nearest edge.
                 (-d2 / (2.0 * sigma * sigma)).max(ln_k)
             })
@@ -235,16 +236,21 @@ where
             Ok(())
         }
         Batch::Parallel(lines) => {
+            // One workspace per rayon job (a few per thread, not one per chunk): its scan
+            // buffers are allocated on first use.
             let results: Vec<Result<()>> = out
                 .par_chunks_mut(PAR_CHUNK)
                 .enumerate()
-                .map(|(chunk, o)| {
-                    let mut ws = MeasurementLines::new(lines)?;
-                    for (j, v) in o.iter_mut().enumerate() {
-                        *v = one(&mut ws, chunk * PAR_CHUNK + j)?;
-                    }
-                    Ok(())
-                })
+                .map_init(
+                    || MeasurementLines::new(lines),
+                    |ws, (chunk, o)| {
+                        let ws = ws.as_mut().map_err(|e| e.clone())?;
+                        for (j, v) in o.iter_mut().enumerate() {
+                            *v = one(ws, chunk * PAR_CHUNK + j)?;
+                        }
+                        Ok(())
+                    },
+                )
                 .collect();
             results.into_iter().collect()
         }

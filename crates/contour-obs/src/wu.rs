@@ -195,12 +195,24 @@ impl LineModel {
     /// mixture X (see the type docs), `None` for an empty window (X = `x_empty`).
     #[inline]
     fn split(&self, edges: &[f64], length: f64, density: &Density) -> (f64, Option<f64>) {
-        let m_l = edges.len();
+        self.split_counted(edges.len(), edges, length, density)
+    }
+
+    /// [`Self::split`] for a line with `m_l` edges of which `candidates` holds (increasing) at
+    /// least those within the window.
+    #[inline]
+    fn split_counted(
+        &self,
+        m_l: usize,
+        candidates: &[f64],
+        length: f64,
+        density: &Density,
+    ) -> (f64, Option<f64>) {
         let (mu, ln_mu) = density.mu(length);
         let ln_n = m_l as f64 * ln_mu - mu - self.ln_fact.get(m_l);
         let mut m_w = 0usize;
         let mut sum_g = 0.0;
-        for z in edges {
+        for z in candidates {
             if z.abs() <= self.half_window {
                 m_w += 1;
                 sum_g += (-z * z * self.inv_two_var).exp();
@@ -224,13 +236,6 @@ impl LineModel {
             log_target: ln_n + x.map_or(self.ln_x_empty, f64::ln),
             log_clutter: ln_n + self.ln_inv_window,
         }
-    }
-
-    /// log p(Z_i | x_i, C) for one line.
-    #[inline]
-    fn log_target(&self, edges: &[f64], length: f64, density: &Density) -> f64 {
-        let (ln_n, x) = self.split(edges, length, density);
-        ln_n + x.map_or(self.ln_x_empty, f64::ln)
     }
 }
 
@@ -258,8 +263,15 @@ impl Mixture {
     /// ln(γ p(Z_i|C) + (1 − γ) p(Z_i|x_i, C)) for one line. At γ = 0 and γ = 1 the sum is
     /// exactly X_target and 1/W, so the value equals `log_target` / `log_clutter` bit for bit.
     #[inline]
-    fn line_log(&self, model: &LineModel, edges: &[f64], length: f64, density: &Density) -> f64 {
-        let (ln_n, x) = model.split(edges, length, density);
+    fn line_log(
+        &self,
+        model: &LineModel,
+        m_l: usize,
+        candidates: &[f64],
+        length: f64,
+        density: &Density,
+    ) -> f64 {
+        let (ln_n, x) = model.split_counted(m_l, candidates, length, density);
         ln_n + x.map_or(self.ln_empty, |x| (self.clutter + self.target * x).ln())
     }
 }
@@ -416,14 +428,46 @@ impl WuLikelihood {
         lambda: f64,
     ) -> Result<f64> {
         let lambda = clamp_lambda(lambda, self.model.min_lambda, 0)?;
-        self.extract(ws, image, pose)?;
         let density = self.density(lambda);
-        Ok((0..ws.len())
-            .map(|i| {
-                self.model
-                    .log_target(ws.edges(i), ws.observed_length(i), &density)
-            })
-            .sum())
+        let model = &self.model;
+        self.sum_lines(ws, image, pose, |m_l, candidates, length| {
+            let (ln_n, x) = model.split_counted(m_l, candidates, length, &density);
+            ln_n + x.map_or(model.ln_x_empty, f64::ln)
+        })
+    }
+
+    /// Σ over the lines of `pose` of `line(m(L), candidate offsets, observed length)`
+    /// ([`MeasurementLines::count_edges`]), in line order. The workspace is left with no lines.
+    #[inline]
+    fn sum_lines<F>(
+        &self,
+        ws: &mut MeasurementLines,
+        image: &GreyView<'_>,
+        pose: &Affine2,
+        mut line: F,
+    ) -> Result<f64>
+    where
+        F: FnMut(usize, &[f64], f64) -> f64,
+    {
+        ensure_workspace(ws, &self.settings.lines)?;
+        if !pose.is_finite() {
+            return Err(Error::NonFinite {
+                what: "pose",
+                index: 0,
+            });
+        }
+        let near = self.model.half_window;
+        let half = self.settings.lines.half_length() as i64;
+        ws.clear();
+        ws.scan_lines(image, &self.contour, pose, -half, half);
+        // −0.0, the neutral element of `Iterator::sum` for floats.
+        let mut total = -0.0;
+        for i in 0..self.contour.len() {
+            let (length, m_l) = ws.count_edges(image, i, near);
+            total += line(m_l, ws.candidates(), length);
+        }
+        ws.clear();
+        Ok(total)
     }
 
     /// [`Self::log_likelihood`] for every pose; `lambdas` holds one shared λ or one per pose.
@@ -512,13 +556,13 @@ impl OcclusionLikelihood {
     ) -> Result<f64> {
         let gamma = check_gamma(gamma, 0)?;
         let lambda = clamp_lambda(lambda, self.wu.model.min_lambda, 0)?;
-        self.wu.extract(ws, image, pose)?;
         let density = self.wu.density(lambda);
         let model = &self.wu.model;
         let mix = Mixture::new(model, gamma);
-        Ok((0..ws.len())
-            .map(|i| mix.line_log(model, ws.edges(i), ws.observed_length(i), &density))
-            .sum())
+        self.wu
+            .sum_lines(ws, image, pose, |m_l, candidates, length| {
+                mix.line_log(model, m_l, candidates, length, &density)
+            })
     }
 
     /// [`Self::log_likelihood`] for every pose; `lambdas` and `gammas` each hold one shared value

@@ -200,6 +200,43 @@ fn occlusion_sum_equals_the_mixture_of_line_terms() {
 }
 
 #[test]
+fn wu_counting_path_equals_the_sum_of_line_terms_bit_for_bit() {
+    // Wu's likelihood counts each line's edges without storing the line and forms only the
+    // window's Gaussians; line_terms extracts and stores every edge. Same edges, same
+    // arithmetic in the same order: the same bits, also for lines over the border.
+    let mut rng = Pcg64Mcg::seed_from_u64(15);
+    let data = clutter_image(&mut rng);
+    let image = GreyView::new(W, H, &data).unwrap();
+    for window in [8.0, 3.0, 20.0] {
+        let settings = WuSettings {
+            lines: LineSettings {
+                n_lines: 30,
+                ..Default::default()
+            },
+            window,
+            ..Default::default()
+        };
+        let wu = WuLikelihood::new(settings, &Template::UnitCircle).unwrap();
+        let occ = OcclusionLikelihood::new(settings, &Template::UnitCircle).unwrap();
+        let mut ws = wu.workspace().unwrap();
+        let mut terms = vec![LineTerms::default(); 30];
+        for pose in poses(&mut rng, 80) {
+            let lambda = 0.07;
+            wu.line_terms(&mut ws, &image, &pose, lambda, &mut terms)
+                .unwrap();
+            let want: f64 = terms.iter().map(|t| t.log_target).sum();
+            let got = wu.log_likelihood(&mut ws, &image, &pose, lambda).unwrap();
+            assert_eq!(got.to_bits(), want.to_bits(), "W = {window}");
+            // γ = 0: the occlusion mixture is the target term, exactly.
+            let occ0 = occ
+                .log_likelihood(&mut ws, &image, &pose, lambda, 0.0)
+                .unwrap();
+            assert_eq!(occ0.to_bits(), want.to_bits());
+        }
+    }
+}
+
+#[test]
 fn parallel_batches_are_bit_identical_to_sequential() {
     let mut rng = Pcg64Mcg::seed_from_u64(14);
     let data = clutter_image(&mut rng);
