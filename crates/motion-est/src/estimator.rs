@@ -775,15 +775,27 @@ impl<const N: usize> Lanes<N> {
         }
     }
 
-    fn flush(&mut self, h: &mut [[f64; N]; N], hp: &mut [[f64; N]; N], b: &mut [f64; N]) {
+    /// Adds the lane sums to `h`, `hp` (only `with_psi`: otherwise its lanes stayed zero) and
+    /// `b`, and clears the lanes.
+    fn flush(
+        &mut self,
+        h: &mut [[f64; N]; N],
+        hp: &mut [[f64; N]; N],
+        b: &mut [f64; N],
+        with_psi: bool,
+    ) {
+        let sum = |lanes: &mut [f32; 8]| {
+            let total = lanes.iter().map(|&v| f64::from(v)).sum::<f64>();
+            *lanes = [0.0; 8];
+            total
+        };
         for a in 0..N {
-            b[a] += self.b[a].iter().map(|&v| f64::from(v)).sum::<f64>();
-            self.b[a] = [0.0; 8];
+            b[a] += sum(&mut self.b[a]);
             for bb in a..N {
-                h[a][bb] += self.h[a][bb].iter().map(|&v| f64::from(v)).sum::<f64>();
-                hp[a][bb] += self.hp[a][bb].iter().map(|&v| f64::from(v)).sum::<f64>();
-                self.h[a][bb] = [0.0; 8];
-                self.hp[a][bb] = [0.0; 8];
+                h[a][bb] += sum(&mut self.h[a][bb]);
+                if with_psi {
+                    hp[a][bb] += sum(&mut self.hp[a][bb]);
+                }
             }
         }
     }
@@ -1244,13 +1256,13 @@ impl Workspace {
                 acc.add(&jl, &wl, &wpl, &rl, with_psi);
                 groups += 1;
                 if groups == 64 {
-                    acc.flush(&mut h, &mut hp, &mut b);
+                    acc.flush(&mut h, &mut hp, &mut b, with_psi);
                     groups = 0;
                 }
                 t += 8;
             }
         }
-        acc.flush(&mut h, &mut hp, &mut b);
+        acc.flush(&mut h, &mut hp, &mut b, with_psi);
         let mut hm = Mat7::zeros();
         let mut hpm = Mat7::zeros();
         let mut bv = Vec7::zeros();
@@ -1322,12 +1334,12 @@ impl Workspace {
                 acc.add(&pl, &wl, &wpl, &rl, with_psi);
                 groups += 1;
                 if groups == 64 {
-                    acc.flush(&mut h, &mut hp, &mut b);
+                    acc.flush(&mut h, &mut hp, &mut b, with_psi);
                     groups = 0;
                 }
                 t += 8;
             }
-            acc.flush(&mut h, &mut hp, &mut b);
+            acc.flush(&mut h, &mut hp, &mut b, with_psi);
             for a in 0..n {
                 let (ia, pa) = (SOURCE[a], POWER[a]);
                 bv[a] += b[ia] * y.powi(pa);

@@ -154,13 +154,16 @@ pub(crate) fn robust_scale_from(
             scratch.clear();
             let n_valid = valid.iter().filter(|&&v| v != 0).count();
             let stride = (n_valid / 512).max(1);
-            let mut seen = 0usize;
+            // Every stride-th valid residual, from the first (a countdown: no division per
+            // residual).
+            let mut skip = 0usize;
             for (&r, &v) in res.iter().zip(valid) {
                 if v != 0 {
-                    if seen.is_multiple_of(stride) {
+                    if skip == 0 {
                         scratch.push(r.abs());
+                        skip = stride;
                     }
-                    seen += 1;
+                    skip -= 1;
                 }
             }
             if scratch.is_empty() {
@@ -200,7 +203,8 @@ fn truncated_sum(res: &[f32], valid: &[u8], t: f32) -> (f64, usize) {
         let (rt, vt) = (rc.remainder(), vc.remainder());
         for (r8, v8) in rc.zip(vc) {
             for l in 0..8 {
-                let keep = v8[l] != 0 && r8[l].abs() < t;
+                // `&`, not `&&`: no branch, so the lanes vectorise.
+                let keep = (v8[l] != 0) & (r8[l].abs() < t);
                 lanes[l] += if keep { r8[l] * r8[l] } else { 0.0 };
                 counts[l] += u32::from(keep);
             }
