@@ -727,6 +727,16 @@ fn box_corners(b: PixelBox, origin: [f64; 2], f: f64) -> [(f64, f64); 4] {
     [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
 }
 
+/// Eight consecutive pixels of a span in f32 lanes: residuals, gradients and the two weights.
+#[derive(Default)]
+struct Group {
+    r: [f32; 8],
+    gx: [f32; 8],
+    gy: [f32; 8],
+    w: [f32; 8],
+    wp: [f32; 8],
+}
+
 /// f32 lane accumulators of the normal equations (upper triangles).
 struct Lanes<const N: usize> {
     h: [[[f32; 8]; N]; N],
@@ -1160,6 +1170,33 @@ impl Workspace {
         }
     }
 
+    /// The `cnt` ≤ 8 pixels from entry `k` as f32 lanes, with their weights (w, w₂) =
+    /// `weights(r/s, m)`. Invalid pixels and unused lanes get zero values and weights (their stored
+    /// values may be stale).
+    #[inline(always)]
+    fn group<F: Fn(f32, f32) -> (f32, f32)>(
+        &self,
+        k: usize,
+        cnt: usize,
+        inv_s: f32,
+        weights: &F,
+    ) -> Group {
+        let mut g = Group::default();
+        let mut m = [0.0f32; 8];
+        for (l, ml) in m.iter_mut().enumerate().take(cnt) {
+            if self.valid[k + l] != 0 {
+                g.r[l] = self.res[k + l];
+                g.gx[l] = self.gx[k + l];
+                g.gy[l] = self.gy[k + l];
+                *ml = self.m[k + l];
+            }
+        }
+        for (l, &ml) in m.iter().enumerate() {
+            (g.w[l], g.wp[l]) = weights(g.r[l] * inv_s, ml);
+        }
+        g
+    }
+
     /// Σ w J Jᵀ, Σ w J r and, with `second`, Σ w₂ J Jᵀ, where (w, w₂) = `weights(r/s, m)`.
     fn accumulate<F: Fn(f32, f32) -> (f32, f32)>(
         &self,
@@ -1210,23 +1247,13 @@ impl Workspace {
             let x_first = (sp.i0 as f64 - o[0]) as f32;
             let mut t = 0;
             while t < sp.len {
-                let cnt = (sp.len - t).min(8);
-                let k = sp.k0 + t;
-                let (mut rl, mut gxl, mut gyl, mut ml) =
-                    ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
-                for l in 0..cnt {
-                    // Invalid pixels get zero weight and zero values (theirs may be stale).
-                    if self.valid[k + l] != 0 {
-                        rl[l] = self.res[k + l];
-                        gxl[l] = self.gx[k + l];
-                        gyl[l] = self.gy[k + l];
-                        ml[l] = self.m[k + l];
-                    }
-                }
-                let (mut wl, mut wpl) = ([0.0f32; 8], [0.0f32; 8]);
-                for l in 0..8 {
-                    (wl[l], wpl[l]) = weights(rl[l] * inv_s, ml[l]);
-                }
+                let Group {
+                    r: rl,
+                    gx: gxl,
+                    gy: gyl,
+                    w: wl,
+                    wp: wpl,
+                } = self.group(sp.k0 + t, (sp.len - t).min(8), inv_s, &weights);
                 let xl: [f32; 8] = std::array::from_fn(|l| x_first + (t + l) as f32);
                 // Jacobian rows as in `MotionModel::gradient_row`, y constant along the span.
                 let mut j7 = [[0.0f32; 8]; 7];
@@ -1307,23 +1334,13 @@ impl Workspace {
             let mut groups = 0usize;
             let (mut h, mut hp, mut b) = ([[0.0f64; P]; P], [[0.0f64; P]; P], [0.0f64; P]);
             while t < sp.len {
-                let cnt = (sp.len - t).min(8);
-                let k = sp.k0 + t;
-                let (mut rl, mut gxl, mut gyl, mut ml) =
-                    ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
-                for l in 0..cnt {
-                    // Invalid pixels get zero weight and zero values (theirs may be stale).
-                    if self.valid[k + l] != 0 {
-                        rl[l] = self.res[k + l];
-                        gxl[l] = self.gx[k + l];
-                        gyl[l] = self.gy[k + l];
-                        ml[l] = self.m[k + l];
-                    }
-                }
-                let (mut wl, mut wpl) = ([0.0f32; 8], [0.0f32; 8]);
-                for l in 0..8 {
-                    (wl[l], wpl[l]) = weights(rl[l] * inv_s, ml[l]);
-                }
+                let Group {
+                    r: rl,
+                    gx: gxl,
+                    gy: gyl,
+                    w: wl,
+                    wp: wpl,
+                } = self.group(sp.k0 + t, (sp.len - t).min(8), inv_s, &weights);
                 let xl: [f32; 8] = std::array::from_fn(|l| x_first + (t + l) as f32);
                 let mut p5 = [[-1.0f32; 8]; 5];
                 p5[0] = gxl;
