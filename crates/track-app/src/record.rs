@@ -343,12 +343,48 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
     write_atomic(path, format!("{text}\n").as_bytes())
 }
 
+/// How many frames were estimated locked, partially occluded and lost (`None` when the tracker
+/// has no status process).
+pub fn status_counts(records: &[FrameRecord]) -> Option<[usize; 3]> {
+    let mut counts = [0; 3];
+    let mut any = false;
+    for r in records {
+        if let Some(s) = r.alpha_hat {
+            counts[s.index()] += 1;
+            any = true;
+        }
+    }
+    any.then_some(counts)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn plain(frame: usize) -> FrameRecord {
         FrameRecord::new(frame, Ellipse::new(10.0, 20.0, 4.0, 2.0, 0.0), 150.5, 1.25)
+    }
+
+    #[test]
+    fn status_counts_need_a_status_process() {
+        assert_eq!(status_counts(&[plain(0), plain(1)]), None);
+        let statuses = [
+            TrackerStatus::Locked,
+            TrackerStatus::Lost,
+            TrackerStatus::Lost,
+            TrackerStatus::Partial,
+        ];
+        let records: Vec<FrameRecord> = statuses
+            .iter()
+            .enumerate()
+            .map(|(k, &s)| {
+                let mut r = plain(k);
+                r.alpha_hat = Some(s);
+                r
+            })
+            .collect();
+        // Locked / partial / lost.
+        assert_eq!(status_counts(&records), Some([1, 1, 2]));
     }
 
     #[test]

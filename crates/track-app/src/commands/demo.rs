@@ -12,7 +12,7 @@ use crate::groundtruth::Box2;
 use crate::metrics::evaluate;
 use crate::output::write_atomic;
 use crate::plots::{all_figures, write_figures};
-use crate::record::{Summary, boxes_string, write_csv, write_summary};
+use crate::record::{Summary, boxes_string, status_counts, write_csv, write_summary};
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
 use crate::session::{ColourBy, DrawOptions};
@@ -122,7 +122,7 @@ pub fn run(args: &Args) -> Result<()> {
         seconds: output.seconds,
         fps: records.len() as f64 / output.seconds.max(1e-9),
         mean_millis: 1e3 * output.seconds / records.len().max(1) as f64,
-        status_counts: None,
+        status_counts: status_counts(records),
         metrics: Some(metrics.clone()),
         outputs: written,
     };

@@ -12,7 +12,7 @@ use crate::groundtruth::{
 use crate::metrics::{SequenceMetrics, evaluate};
 use crate::output::write_atomic;
 use crate::plots::{all_figures, write_figures};
-use crate::record::{FrameRecord, Summary, TrackerStatus, write_csv, write_summary};
+use crate::record::{FrameRecord, Summary, TrackerStatus, status_counts, write_csv, write_summary};
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
 use crate::sequence::{FrameSource, open_sequence};
@@ -377,18 +377,6 @@ fn score(
     let boxes: Vec<Box2> = records.iter().map(|r| r.bbox).collect();
     let t = &truth[start..start + boxes.len()];
     evaluate(&boxes, t, Some(seconds.max(1e-9)))
-}
-
-fn status_counts(records: &[FrameRecord]) -> Option<[usize; 3]> {
-    let mut counts = [0; 3];
-    let mut any = false;
-    for r in records {
-        if let Some(s) = r.alpha_hat {
-            counts[s.index()] += 1;
-            any = true;
-        }
-    }
-    any.then_some(counts)
 }
 
 fn print_summary(s: &Summary, out: &Path) {
