@@ -1198,6 +1198,12 @@ impl Workspace {
     }
 
     /// Σ w J Jᵀ, Σ w J r and, with `second`, Σ w₂ J Jᵀ, where (w, w₂) = `weights(r/s, m)`.
+    ///
+    /// Along a row span y is constant, so every Jacobian entry (as in
+    /// `MotionModel::gradient_row`) is one of a few per-pixel lane rows times 1 or y: translation
+    /// (gx, gy), scale (gx, gy, gx·x + gy·y), affine (gx, gx·x, gy, gy·x), then −1 for the offset.
+    /// The lanes accumulate the rows' moments over a span, which is folded into H, H₂ and g with
+    /// the factors y^(i+j): for the affine model 14 lane sums per pixel instead of the 27 of J Jᵀ.
     fn accumulate<F: Fn(f32, f32) -> (f32, f32)>(
         &self,
         spec: ModelSpec,
@@ -1206,171 +1212,102 @@ impl Workspace {
         second: bool,
         weights: F,
     ) -> (Mat7, Vec7, Mat7) {
+        // Parameter a is lane row map[a].0 times y^map[a].1.
+        let (geometric, row_count): (&[(usize, usize)], usize) = match spec.model {
+            MotionModel::Translation => (&[(0, 0), (1, 0)], 2),
+            MotionModel::Scale => (&[(0, 0), (1, 0), (2, 0)], 3),
+            MotionModel::Affine => (&[(0, 0), (1, 0), (0, 1), (2, 0), (3, 0), (2, 1)], 4),
+        };
+        let mut map = [(0usize, 0usize); 7];
+        map[..geometric.len()].copy_from_slice(geometric);
+        map[geometric.len()] = (row_count, 0);
+        let rows = |g: &Group, x: &[f32; 8], y: f32| -> [[f32; 8]; 5] {
+            // Rows past the model's are the offset's −1.
+            let mut r = [[-1.0f32; 8]; 5];
+            (r[0], r[1]) = (g.gx, g.gy);
+            match spec.model {
+                MotionModel::Translation => {}
+                MotionModel::Scale => {
+                    r[2] = std::array::from_fn(|l| g.gx[l] * x[l] + g.gy[l] * y);
+                }
+                MotionModel::Affine => {
+                    r[1] = std::array::from_fn(|l| g.gx[l] * x[l]);
+                    r[2] = g.gy;
+                    r[3] = std::array::from_fn(|l| g.gy[l] * x[l]);
+                }
+            }
+            r
+        };
+        // Lane rows P and parameters N, known at compile time for each model.
+        macro_rules! spans {
+            ($p:literal, $n:literal) => {{
+                let map: [(usize, usize); $n] = std::array::from_fn(|a| map[a]);
+                self.accumulate_spans::<$p, $n, _, _>(s, o, second, &weights, rows, &map)
+            }};
+        }
         match (spec.model, spec.offset) {
-            (MotionModel::Affine, false) => {
-                return self.normal_equations_affine::<4, _>(spec, s, o, second, weights);
-            }
-            (MotionModel::Affine, true) => {
-                return self.normal_equations_affine::<5, _>(spec, s, o, second, weights);
-            }
-            _ => {}
-        }
-        match spec.len() {
-            2 => self.normal_equations_spans::<2, _>(spec, s, o, second, weights),
-            3 => self.normal_equations_spans::<3, _>(spec, s, o, second, weights),
-            4 => self.normal_equations_spans::<4, _>(spec, s, o, second, weights),
-            6 => self.normal_equations_spans::<6, _>(spec, s, o, second, weights),
-            _ => self.normal_equations_spans::<7, _>(spec, s, o, second, weights),
+            (MotionModel::Translation, false) => spans!(2, 2),
+            (MotionModel::Translation, true) => spans!(3, 3),
+            (MotionModel::Scale, false) => spans!(3, 3),
+            (MotionModel::Scale, true) => spans!(4, 4),
+            (MotionModel::Affine, false) => spans!(4, 6),
+            (MotionModel::Affine, true) => spans!(5, 7),
         }
     }
 
-    /// The accumulation of [`normal_equations`](Self::normal_equations) over the row spans:
-    /// eight contiguous pixels at a time in f32 lanes (residual scaling, weights and Jacobian rows
-    /// all computed in the lanes), flushed to f64 every 64 groups so that f32 sums stay short.
-    fn normal_equations_spans<const N: usize, F: Fn(f32, f32) -> (f32, f32)>(
+    /// The span walk of [`accumulate`](Self::accumulate): eight contiguous pixels at a time in f32
+    /// lanes (residual scaling, weights and the `P` lane rows computed in the lanes), the moments
+    /// flushed to f64 at the end of each span (and every 64 groups, so that f32 sums stay short),
+    /// then folded into the parameters' matrices through `map`.
+    fn accumulate_spans<const P: usize, const N: usize, F, R>(
         &self,
-        spec: ModelSpec,
         s: f64,
         o: [f64; 2],
         with_psi: bool,
-        weights: F,
-    ) -> (Mat7, Vec7, Mat7) {
-        let ng = spec.model.geometric_len();
-        let mut acc = Lanes::<N>::default();
-        let mut h = [[0.0f64; N]; N];
-        let mut hp = [[0.0f64; N]; N];
-        let mut b = [0.0f64; N];
-        let inv_s = (1.0 / s) as f32;
-        let mut groups = 0usize;
-        for sp in &self.spans {
-            let y = (sp.j as f64 - o[1]) as f32;
-            let x_first = (sp.i0 as f64 - o[0]) as f32;
-            let mut t = 0;
-            while t < sp.len {
-                let Group {
-                    r: rl,
-                    gx: gxl,
-                    gy: gyl,
-                    w: wl,
-                    wp: wpl,
-                } = self.group(sp.k0 + t, (sp.len - t).min(8), inv_s, &weights);
-                let xl: [f32; 8] = std::array::from_fn(|l| x_first + (t + l) as f32);
-                // Jacobian rows as in `MotionModel::gradient_row`, y constant along the span.
-                let mut j7 = [[0.0f32; 8]; 7];
-                match spec.model {
-                    MotionModel::Translation => {
-                        j7[0] = gxl;
-                        j7[1] = gyl;
-                    }
-                    MotionModel::Scale => {
-                        j7[0] = gxl;
-                        j7[1] = gyl;
-                        j7[2] = std::array::from_fn(|l| gxl[l] * xl[l] + gyl[l] * y);
-                    }
-                    MotionModel::Affine => {
-                        j7[0] = gxl;
-                        j7[1] = std::array::from_fn(|l| gxl[l] * xl[l]);
-                        j7[2] = std::array::from_fn(|l| gxl[l] * y);
-                        j7[3] = gyl;
-                        j7[4] = std::array::from_fn(|l| gyl[l] * xl[l]);
-                        j7[5] = std::array::from_fn(|l| gyl[l] * y);
-                    }
-                }
-                if spec.offset {
-                    j7[ng] = [-1.0; 8];
-                }
-                let jl: [[f32; 8]; N] = std::array::from_fn(|a| j7[a]);
-                acc.add(&jl, &wl, &wpl, &rl, with_psi);
-                groups += 1;
-                if groups == 64 {
-                    acc.flush(&mut h, &mut hp, &mut b, with_psi);
-                    groups = 0;
-                }
-                t += 8;
-            }
-        }
-        acc.flush(&mut h, &mut hp, &mut b, with_psi);
-        let mut hm = Mat7::zeros();
-        let mut hpm = Mat7::zeros();
-        let mut bv = Vec7::zeros();
-        for a in 0..N {
-            bv[a] = b[a];
-            for bb in a..N {
-                hm[(a, bb)] = h[a][bb];
-                hm[(bb, a)] = h[a][bb];
-                hpm[(a, bb)] = hp[a][bb];
-                hpm[(bb, a)] = hp[a][bb];
-            }
-        }
-        (hm, bv, hpm)
-    }
-
-    /// [`normal_equations_spans`](Self::normal_equations_spans) for the affine model, with half
-    /// the lane work: along a span y is constant, so each Jacobian entry is one of the per-pixel
-    /// values p = (gx, gx·x, gy, gy·x[, −1]) times 1 or y. The lanes accumulate Σ w p pᵀ, Σ w₂ p pᵀ
-    /// and Σ w p r over a span (`P` = 4, or 5 with the offset), and the span is folded into H, H₂
-    /// and g with the factors y^(i+j).
-    fn normal_equations_affine<const P: usize, F: Fn(f32, f32) -> (f32, f32)>(
-        &self,
-        spec: ModelSpec,
-        s: f64,
-        o: [f64; 2],
-        with_psi: bool,
-        weights: F,
-    ) -> (Mat7, Vec7, Mat7) {
-        // Parameter a of Eq. 13 (and the offset) is p[SOURCE[a]] · y^POWER[a].
-        const SOURCE: [usize; 7] = [0, 1, 0, 2, 3, 2, 4];
-        const POWER: [i32; 7] = [0, 0, 1, 0, 0, 1, 0];
-        let n = spec.len();
+        weights: &F,
+        rows: R,
+        map: &[(usize, usize); N],
+    ) -> (Mat7, Vec7, Mat7)
+    where
+        F: Fn(f32, f32) -> (f32, f32),
+        R: Fn(&Group, &[f32; 8], f32) -> [[f32; 8]; 5],
+    {
         let mut acc = Lanes::<P>::default();
-        let mut hm = Mat7::zeros();
-        let mut hpm = Mat7::zeros();
-        let mut bv = Vec7::zeros();
+        let (mut hm, mut hpm, mut bv) = (Mat7::zeros(), Mat7::zeros(), Vec7::zeros());
         let inv_s = (1.0 / s) as f32;
         for sp in &self.spans {
             let y = sp.j as f64 - o[1];
             let x_first = (sp.i0 as f64 - o[0]) as f32;
-            let mut t = 0;
-            let mut groups = 0usize;
             let (mut h, mut hp, mut b) = ([[0.0f64; P]; P], [[0.0f64; P]; P], [0.0f64; P]);
-            while t < sp.len {
-                let Group {
-                    r: rl,
-                    gx: gxl,
-                    gy: gyl,
-                    w: wl,
-                    wp: wpl,
-                } = self.group(sp.k0 + t, (sp.len - t).min(8), inv_s, &weights);
+            let mut groups = 0usize;
+            for t in (0..sp.len).step_by(8) {
+                let g = self.group(sp.k0 + t, (sp.len - t).min(8), inv_s, weights);
                 let xl: [f32; 8] = std::array::from_fn(|l| x_first + (t + l) as f32);
-                let mut p5 = [[-1.0f32; 8]; 5];
-                p5[0] = gxl;
-                p5[1] = std::array::from_fn(|l| gxl[l] * xl[l]);
-                p5[2] = gyl;
-                p5[3] = std::array::from_fn(|l| gyl[l] * xl[l]);
-                let pl: [[f32; 8]; P] = std::array::from_fn(|a| p5[a]);
-                acc.add(&pl, &wl, &wpl, &rl, with_psi);
+                let all = rows(&g, &xl, y as f32);
+                let pl: [[f32; 8]; P] = std::array::from_fn(|a| all[a]);
+                acc.add(&pl, &g.w, &g.wp, &g.r, with_psi);
                 groups += 1;
                 if groups == 64 {
                     acc.flush(&mut h, &mut hp, &mut b, with_psi);
                     groups = 0;
                 }
-                t += 8;
             }
             acc.flush(&mut h, &mut hp, &mut b, with_psi);
-            for a in 0..n {
-                let (ia, pa) = (SOURCE[a], POWER[a]);
-                bv[a] += b[ia] * y.powi(pa);
-                for c in a..n {
-                    let (ic, pc) = (SOURCE[c], POWER[c]);
+            let y_pow = [1.0, y, y * y];
+            for (a, &(ia, pa)) in map.iter().enumerate() {
+                bv[a] += b[ia] * y_pow[pa];
+                for (c, &(ic, pc)) in map.iter().enumerate().skip(a) {
                     let (i, j) = (ia.min(ic), ia.max(ic));
-                    let f = y.powi(pa + pc);
+                    let f = y_pow[pa + pc];
                     hm[(a, c)] += h[i][j] * f;
-                    hpm[(a, c)] += hp[i][j] * f;
+                    if with_psi {
+                        hpm[(a, c)] += hp[i][j] * f;
+                    }
                 }
             }
         }
-        for a in 0..n {
-            for c in a + 1..n {
+        for a in 0..N {
+            for c in a + 1..N {
                 hm[(c, a)] = hm[(a, c)];
                 hpm[(c, a)] = hpm[(a, c)];
             }
