@@ -108,6 +108,12 @@ fn main() {
         if let Some(v) = env("UO") {
             c.likelihood.unknown_occluder_share = v;
         }
+        if let Some(v) = env("ARC") {
+            c.likelihood.occlusion_arc = v > 0.0;
+        }
+        if let Some(v) = env("NEUTRAL") {
+            c.likelihood.neutral_hidden_lines = v > 0.0;
+        }
         if let Some(v) = env("RATIO") {
             c.likelihood.likelihood_ratio = v > 0.0;
         }
