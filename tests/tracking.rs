@@ -227,8 +227,8 @@ fn occlusion_estimate_rises_while_hidden_and_falls_after() {
     // `neutral_hidden_lines`), so "whole contour at the true pose, partly hidden" beats
     // "shrunk onto the visible sliver", the hidden target coasts, and the reacquisition jump
     // finds it again. w-occ (Wu as printed) rises but never finds the target again (the test
-    // above). Measured γ̂ free / hidden / after, seeds 1–4: 0.113 / 0.772 / 0.113,
-    // 0.118 / 0.616 / 0.112, 0.130 / 0.793 / 0.107, 0.104 / 0.864 / 0.104. Each seed must rise
+    // above). Measured γ̂ free / hidden / after, seeds 1–4: 0.113 / 0.772 / 0.112,
+    // 0.116 / 0.617 / 0.111, 0.129 / 0.793 / 0.105, 0.106 / 0.865 / 0.105. Each seed must rise
     // by more than 0.3 and fall back by more than 0.3; the means must be below 0.2 free and
     // after and above 0.5 hidden. A tracker whose γ̂ stays flat (w-eval before this model:
     // 0.08–0.12 throughout) or stays high after (w-occ: 0.93 to the end) fails.
