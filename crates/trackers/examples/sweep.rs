@@ -7,7 +7,8 @@
 //! translation, scale and shape), LC (λ_c), TOL, IT, LEV, MINPIX (motion estimator), EST (use the
 //! plain weighted mean), WIN and PD (Wu's window and detection probability), OA0 (no
 //! occlusion-aware proposal), WS0 (no warm start), DEFSET (accurate motion settings), RATIO=1
-//! (the ratio form of Wu's likelihood, `LikelihoodSettings::likelihood_ratio`), V (per-seed
+//! (the ratio form of Wu's likelihood, `LikelihoodSettings::likelihood_ratio`), ARC=1/0 and NEUTRAL=1/0
+//! (`LikelihoodSettings::occlusion_arc`, `neutral_hidden_lines`), V (per-seed
 //! lines), REACQ=1/0 (reacquisition jump on/off, `TrackerConfig::reacquisition`) with RQLOCK,
 //! RQRATE, RQMAX, RQSPREAD, RQGROW, RQPG, RQVG, RQSG, RQBACK, RQSHAPE (its settings). Diagnostics: TRACE (one line per frame), LAND=k (likelihood landscape at frame k),
 //! DUMP=k (frame k as a binary PGM on stdout).
