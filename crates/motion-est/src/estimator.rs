@@ -213,8 +213,6 @@ impl MotionEstimate {
 #[derive(Debug, Clone, Default)]
 pub struct Workspace {
     idx: Vec<u32>,
-    ax: Vec<f32>,
-    ay: Vec<f32>,
     m: Vec<f32>,
     res: Vec<f32>,
     gx: Vec<f32>,
@@ -941,8 +939,6 @@ impl Workspace {
     /// (no per-pixel region test for rectangles and ellipses: see [`RowTest`]).
     fn collect(&mut self, level: &Level, l: usize, region: &Region<'_>, b: PixelBox) -> usize {
         self.idx.clear();
-        self.ax.clear();
-        self.ay.clear();
         self.m.clear();
         self.spans.clear();
         let s = 1usize << l;
@@ -954,8 +950,23 @@ impl Workspace {
             return 0;
         }
         let test = RowTest::new(region);
+        // Every pixel of a rectangle's (or the frame's) box is inside with weight 1: whole rows.
+        let dense = matches!(region, Region::Full | Region::Rect { .. });
         for j in j_lo..=j_hi {
             let (a, z) = test.row(j, s, i_lo, i_hi);
+            if dense && a <= z {
+                let base = (j - level.y0) * level.width - level.x0;
+                let k0 = self.idx.len();
+                self.idx.extend((a..=z).map(|i| (base + i) as u32));
+                self.m.resize(self.idx.len(), 1.0);
+                self.spans.push(Span {
+                    j,
+                    i0: a,
+                    len: z + 1 - a,
+                    k0,
+                });
+                continue;
+            }
             let mut run: Option<Span> = None;
             for i in a..=z {
                 // Interior pixels of convex regions need no test (weight 1); masks always do.
@@ -963,8 +974,6 @@ impl Workspace {
                 if wgt > 0.0 {
                     self.idx
                         .push(((j - level.y0) * level.width + (i - level.x0)) as u32);
-                    self.ax.push(i as f32);
-                    self.ay.push(j as f32);
                     self.m.push(wgt);
                     match run.as_mut() {
                         Some(r) if r.i0 + r.len == i => r.len += 1,
@@ -1435,30 +1444,52 @@ impl Workspace {
             (0, 0)
         };
         // Tap positions once per pixel (one 32-bit division for the second frame), then the box,
-        // and each span's range of rows.
-        self.pos.clear();
-        self.span_rows.clear();
+        // and each span's range of rows; by bands for large regions (min and max do not depend
+        // on the order).
+        self.pos.resize(self.idx.len(), (0, 0));
+        self.span_rows.resize(self.spans.len(), (0, 0));
         let w1 = l1.map_or(1, |l| l.width as u32);
-        let (mut minx, mut miny, mut maxx, mut maxy) = (u32::MAX, u32::MAX, 0u32, 0u32);
-        for sp in &self.spans {
-            let (mut lo, mut hi) = (u32::MAX, 0u32);
-            for k in sp.k0..sp.k0 + sp.len {
-                let (x, y) = match l1 {
-                    None => (self.ax[k] as u32, self.ay[k] as u32),
-                    Some(_) => {
-                        let y = self.qi[k] / w1;
-                        (self.qi[k] - y * w1, y)
+        let (spans, qi, valid) = (&self.spans[..], &self.qi[..], &self.valid[..]);
+        let positions = |sp0: usize, kb: usize, pos: &mut [(u32, u32)], rows: &mut [(u32, u32)]| {
+            let mut bbox = (u32::MAX, u32::MAX, 0u32, 0u32);
+            for (t, sp) in spans[sp0..sp0 + rows.len()].iter().enumerate() {
+                let (mut lo, mut hi) = (u32::MAX, 0u32);
+                for k in sp.k0..sp.k0 + sp.len {
+                    let (x, y) = match l1 {
+                        None => ((sp.i0 + k - sp.k0) as u32, sp.j as u32),
+                        Some(_) => {
+                            let y = qi[k] / w1;
+                            (qi[k] - y * w1, y)
+                        }
+                    };
+                    pos[k - kb] = (x, y);
+                    if valid[k] != 0 {
+                        (bbox.0, bbox.2) = (bbox.0.min(x), bbox.2.max(x));
+                        (lo, hi) = (lo.min(y), hi.max(y));
                     }
-                };
-                self.pos.push((x, y));
-                if self.valid[k] != 0 {
-                    (minx, maxx) = (minx.min(x), maxx.max(x));
-                    (lo, hi) = (lo.min(y), hi.max(y));
                 }
+                (bbox.1, bbox.3) = (bbox.1.min(lo), bbox.3.max(hi));
+                rows[t] = (lo, hi);
             }
-            (miny, maxy) = (miny.min(lo), maxy.max(hi));
-            self.span_rows.push((lo, hi));
-        }
+            bbox
+        };
+        let (minx, miny, maxx, maxy) = if self.parallel() {
+            let mut parts = Vec::with_capacity(self.bands.len());
+            let (mut pos, mut rows) = (&mut self.pos[..], &mut self.span_rows[..]);
+            for band in &self.bands {
+                let (p, p_rest) = pos.split_at_mut(band.k1 - band.k0);
+                let (r, r_rest) = rows.split_at_mut(band.s1 - band.s0);
+                parts.push((band, p, r));
+                (pos, rows) = (p_rest, r_rest);
+            }
+            map_bands(parts, |(band, p, r)| positions(band.s0, band.k0, p, r))
+                .into_iter()
+                .fold((u32::MAX, u32::MAX, 0, 0), |a, b| {
+                    (a.0.min(b.0), a.1.min(b.1), a.2.max(b.2), a.3.max(b.3))
+                })
+        } else {
+            positions(0, 0, &mut self.pos, &mut self.span_rows)
+        };
         if minx > maxx {
             return Mat7::zeros();
         }
@@ -2051,15 +2082,16 @@ mod tests {
             let (n, ng) = (spec.len(), spec.model.geometric_len());
             let (mut hr, mut br, mut hpr) = (Mat7::zeros(), Vec7::zeros(), Mat7::zeros());
             let mut j = [0.0f64; 7];
-            for k in 0..ws.idx.len() {
+            let pixels = ws
+                .spans
+                .iter()
+                .flat_map(|sp| (0..sp.len).map(move |t| (sp.k0 + t, sp.i0 + t, sp.j)));
+            for (k, i, jj) in pixels {
                 if ws.valid[k] == 0 {
                     continue;
                 }
                 let r = f64::from(ws.res[k]);
-                let (x, y) = (
-                    f64::from(ws.ax[k]) - origin[0],
-                    f64::from(ws.ay[k]) - origin[1],
-                );
+                let (x, y) = (i as f64 - origin[0], jj as f64 - origin[1]);
                 spec.model
                     .gradient_row(f64::from(ws.gx[k]), f64::from(ws.gy[k]), x, y, &mut j);
                 if spec.offset {
