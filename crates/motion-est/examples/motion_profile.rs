@@ -46,6 +46,23 @@ fn pair(zoom: f64) -> (Vec<f32>, Vec<f32>) {
     (f0, f1)
 }
 
+/// Runs `f` `n` times in 20 batches; the minimum and median batch means (ms): the minimum is
+/// the figure least affected by other processes on a shared machine.
+fn batches(n: usize, mut f: impl FnMut()) -> String {
+    let per = (n / 20).max(1);
+    let mut means: Vec<f64> = (0..20)
+        .map(|_| {
+            let t = Instant::now();
+            for _ in 0..per {
+                f();
+            }
+            t.elapsed().as_secs_f64() * 1e3 / per as f64
+        })
+        .collect();
+    means.sort_by(f64::total_cmp);
+    format!("min {:.4} ms, median {:.4} ms", means[0], means[10])
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let case = args.get(1).map_or("full", String::as_str).to_string();
@@ -63,14 +80,13 @@ fn main() {
         "full" => {
             let est = MotionEstimator::new(Settings::default()).unwrap();
             let mut bufs = FrameBuffers::default();
-            let t = Instant::now();
-            for _ in 0..n {
+            let times = batches(n, || {
                 black_box(
                     est.estimate_images_into(v0, v1, &Region::Full, spec, None, &mut bufs)
                         .unwrap(),
                 );
-            }
-            println!("full: {:.3} ms", t.elapsed().as_secs_f64() * 1e3 / n as f64);
+            });
+            println!("full: {times}");
         }
         _ => {
             let est = MotionEstimator::new(Settings::tracking()).unwrap();

@@ -1548,7 +1548,7 @@ impl Workspace {
 }
 
 /// Grid rows per band of the covariance grid for large regions (see `Workspace::meat`).
-const GRID_BAND_ROWS: usize = 64;
+const GRID_BAND_ROWS: usize = 128;
 
 /// The covariance grid of one frame: `n` planes of `bw`×`bh` cells (origin (`ox`, `oy`) in the
 /// level), onto which the per-pixel vectors `u` are scattered at `pos` (through the interpolation
