@@ -764,7 +764,7 @@ impl<const N: usize> Default for Lanes<N> {
 }
 
 impl<const N: usize> Lanes<N> {
-    #[inline(always)]
+    #[inline]
     fn add<const PSI: bool>(
         &mut self,
         j: &[[f32; 8]; N],
