@@ -87,6 +87,15 @@ fn main() {
                 );
             });
             println!("full: {times}");
+            let r = est
+                .estimate_images_into(v0, v1, &Region::Full, spec, None, &mut bufs)
+                .unwrap();
+            let h = r
+                .params
+                .iter()
+                .chain(&r.covariance)
+                .fold(0u64, |h, v| h.rotate_left(7) ^ v.to_bits());
+            println!("result bits hash {h:016x}");
         }
         _ => {
             let est = MotionEstimator::new(Settings::tracking()).unwrap();

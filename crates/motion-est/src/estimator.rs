@@ -1244,7 +1244,9 @@ impl Workspace {
         let band = |spans: &[Span]| {
             self.accumulate_band::<P, N, PSI, F, R>(spans, s, o, weights, &rows, map)
         };
-        let (mut hm, bv, mut hpm) = if self.parallel() {
+        // Bands whenever the region has several, with or without the `parallel` feature, so that
+        // the sums are the same either way.
+        let (mut hm, bv, mut hpm) = if self.bands.len() > 1 {
             // Per-band sums, added in band order.
             let parts = map_bands(self.bands.clone(), |b| band(&self.spans[b.s0..b.s1]));
             let mut total = (Mat7::zeros(), Vec7::zeros(), Mat7::zeros());
@@ -1385,7 +1387,7 @@ impl Workspace {
             fx: &self.fx,
             fy: &self.fy,
         };
-        let (gain, n_in, m_in, m_all) = if self.bands.len() > 1 && cfg!(feature = "parallel") {
+        let (gain, n_in, m_in, m_all) = if self.bands.len() > 1 {
             // Per-band sums, added in band order.
             let mut parts = Vec::with_capacity(self.bands.len());
             let mut rest = &mut self.u[..];
