@@ -213,8 +213,6 @@ impl MotionEstimate {
 #[derive(Debug, Clone, Default)]
 pub struct Workspace {
     idx: Vec<u32>,
-    ax: Vec<f32>,
-    ay: Vec<f32>,
     m: Vec<f32>,
     res: Vec<f32>,
     gx: Vec<f32>,
@@ -231,9 +229,12 @@ pub struct Workspace {
     scratch: Vec<f32>,
     /// Runs of consecutive region pixels on one row, from `collect`.
     spans: Vec<Span>,
-    /// Channel planes of the covariance's dense grid, and a convolution buffer.
-    planes: Vec<f32>,
-    tmp: Vec<f32>,
+    /// The spans cut into bands for concurrent processing of large regions.
+    bands: Vec<Band>,
+    /// Per span, the range of sample rows of its valid pixels (for the covariance grid's bands).
+    span_rows: Vec<(u32, u32)>,
+    /// Per band of the covariance's dense grid: its channel planes and a convolution buffer.
+    grids: Vec<(Vec<f32>, Vec<f32>)>,
 }
 
 /// A run of `len` consecutive region pixels on level row `j` from column `i0`, stored from entry
@@ -335,12 +336,20 @@ impl MotionEstimator {
         })?;
         let win = Window::around(b.i0, b.j0, b.i1, b.j1, self.settings.margin, w, h);
         let s = &self.settings;
-        buffers
-            .pyramid0
-            .build_into(image0, Some(win), s.levels, s.presmooth)?;
-        buffers
-            .pyramid1
-            .build_into(image1, Some(win), s.levels, s.presmooth)?;
+        let (p0, p1) = (&mut buffers.pyramid0, &mut buffers.pyramid1);
+        let mut build0 = move || p0.build_into(image0, Some(win), s.levels, s.presmooth);
+        let mut build1 = move || p1.build_into(image1, Some(win), s.levels, s.presmooth);
+        // Large windows: both frames at once (each pyramid is built exactly as alone).
+        #[cfg(feature = "parallel")]
+        let (r0, r1) = if win.width * win.height >= 2 * BAND_PIXELS {
+            rayon::join(build0, build1)
+        } else {
+            (build0(), build1())
+        };
+        #[cfg(not(feature = "parallel"))]
+        let (r0, r1) = (build0(), build1());
+        r0?;
+        r1?;
         self.estimate(
             &buffers.pyramid0,
             &buffers.pyramid1,
@@ -756,13 +765,12 @@ impl<const N: usize> Default for Lanes<N> {
 
 impl<const N: usize> Lanes<N> {
     #[inline]
-    fn add(
+    fn add<const PSI: bool>(
         &mut self,
         j: &[[f32; 8]; N],
         w: &[f32; 8],
         wp: &[f32; 8],
         r: &[f32; 8],
-        with_psi: bool,
     ) {
         for a in 0..N {
             let wa: [f32; 8] = std::array::from_fn(|l| w[l] * j[a][l]);
@@ -774,7 +782,7 @@ impl<const N: usize> Lanes<N> {
                     hab[l] += wa[l] * jb[l];
                 }
             }
-            if with_psi {
+            if PSI {
                 let pa: [f32; 8] = std::array::from_fn(|l| wp[l] * j[a][l]);
                 for (hab, jb) in self.hp[a].iter_mut().zip(j.iter()).skip(a) {
                     for l in 0..8 {
@@ -785,14 +793,13 @@ impl<const N: usize> Lanes<N> {
         }
     }
 
-    /// Adds the lane sums to `h`, `hp` (only `with_psi`: otherwise its lanes stayed zero) and
+    /// Adds the lane sums to `h`, `hp` (only with `PSI`: otherwise its lanes stayed zero) and
     /// `b`, and clears the lanes.
-    fn flush(
+    fn flush<const PSI: bool>(
         &mut self,
         h: &mut [[f64; N]; N],
         hp: &mut [[f64; N]; N],
         b: &mut [f64; N],
-        with_psi: bool,
     ) {
         let sum = |lanes: &mut [f32; 8]| {
             let total = lanes.iter().map(|&v| f64::from(v)).sum::<f64>();
@@ -803,7 +810,7 @@ impl<const N: usize> Lanes<N> {
             b[a] += sum(&mut self.b[a]);
             for bb in a..N {
                 h[a][bb] += sum(&mut self.h[a][bb]);
-                if with_psi {
+                if PSI {
                     hp[a][bb] += sum(&mut self.hp[a][bb]);
                 }
             }
@@ -932,8 +939,6 @@ impl Workspace {
     /// (no per-pixel region test for rectangles and ellipses: see [`RowTest`]).
     fn collect(&mut self, level: &Level, l: usize, region: &Region<'_>, b: PixelBox) -> usize {
         self.idx.clear();
-        self.ax.clear();
-        self.ay.clear();
         self.m.clear();
         self.spans.clear();
         let s = 1usize << l;
@@ -945,8 +950,23 @@ impl Workspace {
             return 0;
         }
         let test = RowTest::new(region);
+        // Every pixel of a rectangle's (or the frame's) box is inside with weight 1: whole rows.
+        let dense = matches!(region, Region::Full | Region::Rect { .. });
         for j in j_lo..=j_hi {
             let (a, z) = test.row(j, s, i_lo, i_hi);
+            if dense && a <= z {
+                let base = (j - level.y0) * level.width - level.x0;
+                let k0 = self.idx.len();
+                self.idx.extend((a..=z).map(|i| (base + i) as u32));
+                self.m.resize(self.idx.len(), 1.0);
+                self.spans.push(Span {
+                    j,
+                    i0: a,
+                    len: z + 1 - a,
+                    k0,
+                });
+                continue;
+            }
             let mut run: Option<Span> = None;
             for i in a..=z {
                 // Interior pixels of convex regions need no test (weight 1); masks always do.
@@ -954,8 +974,6 @@ impl Workspace {
                 if wgt > 0.0 {
                     self.idx
                         .push(((j - level.y0) * level.width + (i - level.x0)) as u32);
-                    self.ax.push(i as f32);
-                    self.ay.push(j as f32);
                     self.m.push(wgt);
                     match run.as_mut() {
                         Some(r) if r.i0 + r.len == i => r.len += 1,
@@ -977,7 +995,34 @@ impl Workspace {
                 self.spans.push(r);
             }
         }
+        self.make_bands();
         self.idx.len()
+    }
+
+    /// Cuts the spans into bands of consecutive spans holding at least [`BAND_PIXELS`] pixels
+    /// each (the last one may hold fewer). The cut depends only on the region's pixels.
+    fn make_bands(&mut self) {
+        self.bands.clear();
+        let mut start = 0;
+        for (i, sp) in self.spans.iter().enumerate() {
+            let k1 = sp.k0 + sp.len;
+            let k0 = self.spans[start].k0;
+            if k1 - k0 >= BAND_PIXELS || i + 1 == self.spans.len() {
+                self.bands.push(Band {
+                    s0: start,
+                    s1: i + 1,
+                    k0,
+                    k1,
+                });
+                start = i + 1;
+            }
+        }
+    }
+
+    /// Whether the region is large enough (more than one band) for the bands to be processed
+    /// concurrently. Small regions stay on one thread without touching the pool.
+    fn parallel(&self) -> bool {
+        cfg!(feature = "parallel") && self.bands.len() > 1
     }
 
     /// Residuals, gradients and validity of the listed pixels under Θ (level units, origin `o`).
@@ -1025,121 +1070,42 @@ impl Workspace {
             self.valid.fill(0);
             return 0;
         }
-        let (xmax, ymax) = ((w1 - 1) as f64, (h1 - 1) as f64);
-        let (d1, d0) = (&l1.data[..], &l0.data[..]);
-        let mut n_valid = 0;
-        if full_res {
-            // Full resolution: the sample loop computes only the residual and where it was taken;
-            // the Jacobian's gradients (the first frame's, mapped through (I + D)^−T) are read from
-            // contiguous rows in a second, vectorisable loop. A span's pixels are consecutive in
-            // the first frame's level, so its rows there are plain slices.
-            for sp in &self.spans {
-                let y = sp.j as f64;
-                let (qx0, qy0) = (cx + bx2 * y, cy + by2 * y);
-                let r = sp.k0..sp.k0 + sp.len;
-                let first = self.idx[sp.k0] as usize;
-                let z0 = &d0[first..first + sp.len];
-                // Pass 1: where each sample falls (kept: the covariance reads it), and which taps
-                // it uses: `valid` is 2 for the bicubic interior, 1 for the bilinear border.
-                let pos = self.fx[r.clone()]
-                    .iter_mut()
-                    .zip(&mut self.fy[r.clone()])
-                    .zip(&mut self.qi[r.clone()])
-                    .zip(&mut self.valid[r.clone()]);
-                for (t, (((fxo, fyo), qio), valid)) in pos.enumerate() {
-                    let x = (sp.i0 + t) as f64;
-                    *valid = match Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1) {
-                        Some(Sample {
-                            ix,
-                            iy,
-                            fx,
-                            fy,
-                            i00,
-                        }) => {
-                            (*fxo, *fyo, *qio) = (fx, fy, i00 as u32);
-                            if ix >= 1 && iy >= 1 && ix + 2 < w1 && iy + 2 < h1 {
-                                2
-                            } else {
-                                1
-                            }
-                        }
-                        None => 0,
-                    };
-                }
-                // Pass 2: the values. Bicubic: bilinear interpolation error on fine texture would
-                // bias the estimate and inflate the residual scale. (Two short loops keep the
-                // interpolation's operands in registers; one long loop spilled them.)
-                let vals = self.res[r.clone()]
-                    .iter_mut()
-                    .zip(&self.fx[r.clone()])
-                    .zip(&self.fy[r.clone()])
-                    .zip(&self.qi[r.clone()])
-                    .zip(&self.valid[r.clone()])
-                    .zip(z0);
-                for (((((res, &fx), &fy), &qi), &valid), &z0) in vals {
-                    let i00 = qi as usize;
-                    let v = match valid {
-                        0 => continue,
-                        2 => bicubic(d1, i00, w1, fx, fy),
-                        _ => bilinear(d1, i00, w1, fx, fy),
-                    };
-                    *res = v - z0 - c;
-                    n_valid += 1;
-                }
-                let (g0x, g0y) = (&l0.gx[first..first + sp.len], &l0.gy[first..first + sp.len]);
-                let grads = self.gx[r.clone()]
-                    .iter_mut()
-                    .zip(&mut self.gy[r])
-                    .zip(g0x)
-                    .zip(g0y);
-                for (((gxo, gyo), &ax), &ay) in grads {
-                    *gxo = t11 * ax + t12 * ay;
-                    *gyo = t21 * ax + t22 * ay;
-                }
-            }
-            return n_valid;
+        let par = self.parallel();
+        let ctx = Warp {
+            c: [cx, cy],
+            b: [bx1, bx2, by1, by2],
+            t: [t11, t12, t21, t22],
+            offset: c,
+            l0,
+            l1,
+            full_res,
+        };
+        let out = Samples {
+            res: &mut self.res,
+            gx: &mut self.gx,
+            gy: &mut self.gy,
+            fx: &mut self.fx,
+            fy: &mut self.fy,
+            qi: &mut self.qi,
+            valid: &mut self.valid,
+        };
+        let (spans, idx) = (&self.spans[..], &self.idx[..]);
+        if !par {
+            return ctx.spans(spans, idx, 0, out);
         }
-        // Coarse levels: bilinear values and second-frame gradients in the sample loop, then the
-        // first frame's mapped gradients averaged in from contiguous rows (see above). The sample
-        // positions are not stored: only the full-resolution covariance reads them.
-        for sp in &self.spans {
-            let y = sp.j as f64;
-            let (qx0, qy0) = (cx + bx2 * y, cy + by2 * y);
-            let r = sp.k0..sp.k0 + sp.len;
-            let first = self.idx[sp.k0] as usize;
-            let z0 = &d0[first..first + sp.len];
-            let out = self.res[r.clone()]
-                .iter_mut()
-                .zip(&mut self.gx[r.clone()])
-                .zip(&mut self.gy[r.clone()])
-                .zip(&mut self.valid[r.clone()])
-                .zip(z0);
-            for (t, ((((res, gxo), gyo), valid), &z0)) in out.enumerate() {
-                let x = (sp.i0 + t) as f64;
-                let Some(Sample { fx, fy, i00, .. }) =
-                    Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1)
-                else {
-                    *valid = 0;
-                    continue;
-                };
-                *res = bilinear(d1, i00, w1, fx, fy) - z0 - c;
-                *gxo = bilinear(&l1.gx, i00, w1, fx, fy);
-                *gyo = bilinear(&l1.gy, i00, w1, fx, fy);
-                *valid = 1;
-                n_valid += 1;
-            }
-            let (g0x, g0y) = (&l0.gx[first..first + sp.len], &l0.gy[first..first + sp.len]);
-            let grads = self.gx[r.clone()]
-                .iter_mut()
-                .zip(&mut self.gy[r])
-                .zip(g0x)
-                .zip(g0y);
-            for (((gxo, gyo), &ax), &ay) in grads {
-                *gxo = 0.5 * (*gxo + t11 * ax + t12 * ay);
-                *gyo = 0.5 * (*gyo + t21 * ax + t22 * ay);
-            }
+        // Every pixel's outputs depend on that pixel alone: the bands write disjoint slices.
+        let mut outs = Vec::with_capacity(self.bands.len());
+        let mut rest = out;
+        for band in &self.bands {
+            let (head, tail) = rest.split_at(band.k1 - band.k0);
+            outs.push((band, head));
+            rest = tail;
         }
-        n_valid
+        map_bands(outs, |(band, o)| {
+            ctx.spans(&spans[band.s0..band.s1], idx, band.k0, o)
+        })
+        .into_iter()
+        .sum()
     }
 
     /// IRLS normal equations H = Σ m w J Jᵀ and g = Σ m w J r, and, with `with_psi`, the sensitivity
@@ -1204,7 +1170,7 @@ impl Workspace {
     /// (gx, gy), scale (gx, gy, gx·x + gy·y), affine (gx, gx·x, gy, gy·x), then −1 for the offset.
     /// The lanes accumulate the rows' moments over a span, which is folded into H, H₂ and g with
     /// the factors y^(i+j): for the affine model 14 lane sums per pixel instead of the 27 of J Jᵀ.
-    fn accumulate<F: Fn(f32, f32) -> (f32, f32)>(
+    fn accumulate<F: Fn(f32, f32) -> (f32, f32) + Sync>(
         &self,
         spec: ModelSpec,
         s: f64,
@@ -1242,7 +1208,11 @@ impl Workspace {
         macro_rules! spans {
             ($p:literal, $n:literal) => {{
                 let map: [(usize, usize); $n] = std::array::from_fn(|a| map[a]);
-                self.accumulate_spans::<$p, $n, _, _>(s, o, second, &weights, rows, &map)
+                if second {
+                    self.accumulate_spans::<$p, $n, true, _, _>(s, o, &weights, rows, &map)
+                } else {
+                    self.accumulate_spans::<$p, $n, false, _, _>(s, o, &weights, rows, &map)
+                }
             }};
         }
         match (spec.model, spec.offset) {
@@ -1259,13 +1229,55 @@ impl Workspace {
     /// lanes (residual scaling, weights and the `P` lane rows computed in the lanes), the moments
     /// flushed to f64 at the end of each span (and every 64 groups, so that f32 sums stay short),
     /// then folded into the parameters' matrices through `map`.
-    fn accumulate_spans<const P: usize, const N: usize, F, R>(
+    fn accumulate_spans<const P: usize, const N: usize, const PSI: bool, F, R>(
         &self,
         s: f64,
         o: [f64; 2],
-        with_psi: bool,
         weights: &F,
         rows: R,
+        map: &[(usize, usize); N],
+    ) -> (Mat7, Vec7, Mat7)
+    where
+        F: Fn(f32, f32) -> (f32, f32) + Sync,
+        R: Fn(&Group, &[f32; 8], f32) -> [[f32; 8]; 5] + Sync,
+    {
+        let band = |spans: &[Span]| {
+            self.accumulate_band::<P, N, PSI, F, R>(spans, s, o, weights, &rows, map)
+        };
+        // Bands whenever the region has several, with or without the `parallel` feature, so that
+        // the sums are the same either way.
+        let (mut hm, bv, mut hpm) = if self.bands.len() > 1 {
+            // Per-band sums, added in band order.
+            let parts = map_bands(self.bands.clone(), |b| band(&self.spans[b.s0..b.s1]));
+            let mut total = (Mat7::zeros(), Vec7::zeros(), Mat7::zeros());
+            for (h, b, hp) in parts {
+                total.0 += h;
+                total.1 += b;
+                total.2 += hp;
+            }
+            total
+        } else {
+            band(&self.spans)
+        };
+        for a in 0..N {
+            for c in a + 1..N {
+                hm[(c, a)] = hm[(a, c)];
+                hpm[(c, a)] = hpm[(a, c)];
+            }
+        }
+        (hm, bv, hpm)
+    }
+
+    /// [`accumulate_spans`](Self::accumulate_spans) over some spans: upper triangles only.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn accumulate_band<const P: usize, const N: usize, const PSI: bool, F, R>(
+        &self,
+        spans: &[Span],
+        s: f64,
+        o: [f64; 2],
+        weights: &F,
+        rows: &R,
         map: &[(usize, usize); N],
     ) -> (Mat7, Vec7, Mat7)
     where
@@ -1275,7 +1287,7 @@ impl Workspace {
         let mut acc = Lanes::<P>::default();
         let (mut hm, mut hpm, mut bv) = (Mat7::zeros(), Mat7::zeros(), Vec7::zeros());
         let inv_s = (1.0 / s) as f32;
-        for sp in &self.spans {
+        for sp in spans {
             let y = sp.j as f64 - o[1];
             let x_first = (sp.i0 as f64 - o[0]) as f32;
             let (mut h, mut hp, mut b) = ([[0.0f64; P]; P], [[0.0f64; P]; P], [0.0f64; P]);
@@ -1285,14 +1297,14 @@ impl Workspace {
                 let xl: [f32; 8] = std::array::from_fn(|l| x_first + (t + l) as f32);
                 let all = rows(&g, &xl, y as f32);
                 let pl: [[f32; 8]; P] = std::array::from_fn(|a| all[a]);
-                acc.add(&pl, &g.w, &g.wp, &g.r, with_psi);
+                acc.add::<PSI>(&pl, &g.w, &g.wp, &g.r);
                 groups += 1;
                 if groups == 64 {
-                    acc.flush(&mut h, &mut hp, &mut b, with_psi);
+                    acc.flush::<PSI>(&mut h, &mut hp, &mut b);
                     groups = 0;
                 }
             }
-            acc.flush(&mut h, &mut hp, &mut b, with_psi);
+            acc.flush::<PSI>(&mut h, &mut hp, &mut b);
             let y_pow = [1.0, y, y * y];
             for (a, &(ia, pa)) in map.iter().enumerate() {
                 bv[a] += b[ia] * y_pow[pa];
@@ -1300,16 +1312,10 @@ impl Workspace {
                     let (i, j) = (ia.min(ic), ia.max(ic));
                     let f = y_pow[pa + pc];
                     hm[(a, c)] += h[i][j] * f;
-                    if with_psi {
+                    if PSI {
                         hpm[(a, c)] += hp[i][j] * f;
                     }
                 }
-            }
-        }
-        for a in 0..N {
-            for c in a + 1..N {
-                hm[(c, a)] = hm[(a, c)];
-                hpm[(c, a)] = hpm[(a, c)];
             }
         }
         (hm, bv, hpm)
@@ -1329,7 +1335,6 @@ impl Workspace {
         l1: &Level,
     ) -> Result<CovarianceOut> {
         let n = spec.len();
-        let ng = spec.model.geometric_len();
         let c = robust.c();
         // Sensitivity H = Σ m ψ' J Jᵀ; when too many residuals sit where ψ' < 0 it may not be
         // positive definite, and the IRLS matrix (its expectation under a clean fit) is used.
@@ -1362,53 +1367,47 @@ impl Workspace {
         // Noise variance from the scale and the per-pixel variance gains; inlier fraction; u.
         let ka = if presmooth { KERNEL_A } else { 1.0 };
         let table: [f64; 65] = std::array::from_fn(|i| interp_gain(i as f64 / 64.0, presmooth));
-        let q = |f: f64| table[((f * 64.0 + 0.5) as usize).min(64)];
-        let (mut gain, mut n_in, mut m_in, mut m_all) = (0.0f64, 0usize, 0.0f64, 0.0f64);
         self.u.clear();
         self.u.resize(self.idx.len(), [0.0; 8]);
         let (e1, e2) = moments;
-        let e1f = e1 as f32;
-        let rejection = robust.rejection();
-        for sp in &self.spans {
-            let y = (sp.j as f64 - o[1]) as f32;
-            let x_first = (sp.i0 as f64 - o[0]) as f32;
-            for k in sp.k0..sp.k0 + sp.len {
-                m_all += f64::from(self.m[k]);
-                if self.valid[k] == 0 {
-                    continue;
-                }
-                let z = f64::from(self.res[k]) / s;
-                if z.abs() < c {
-                    let (fx, fy) = (f64::from(self.fx[k]), f64::from(self.fy[k]));
-                    gain += ka * ka + q(fx) * q(fy);
-                    n_in += 1;
-                    m_in += f64::from(self.m[k]);
-                }
-                // Pixels a redescending ρ rejects carry no noise into Θ̂.
-                if rejection.is_some_and(|r| z.abs() >= r) {
-                    continue;
-                }
-                let me = self.m[k] * e1f;
-                let (gx, gy) = (self.gx[k] * me, self.gy[k] * me);
-                let x = x_first + (k - sp.k0) as f32;
-                let u = &mut self.u[k];
-                match spec.model {
-                    MotionModel::Translation => {
-                        (u[0], u[1]) = (gx, gy);
-                    }
-                    MotionModel::Scale => {
-                        (u[0], u[1], u[2]) = (gx, gy, gx * x + gy * y);
-                    }
-                    MotionModel::Affine => {
-                        (u[0], u[1], u[2]) = (gx, gx * x, gx * y);
-                        (u[3], u[4], u[5]) = (gy, gy * x, gy * y);
-                    }
-                }
-                if spec.offset {
-                    u[ng] = -me;
-                }
+        let ctx = UVectors {
+            spec,
+            e1: e1 as f32,
+            c,
+            rejection: robust.rejection(),
+            s,
+            o,
+            ka,
+            table: &table,
+            res: &self.res,
+            valid: &self.valid,
+            m: &self.m,
+            gx: &self.gx,
+            gy: &self.gy,
+            fx: &self.fx,
+            fy: &self.fy,
+        };
+        let (gain, n_in, m_in, m_all) = if self.bands.len() > 1 {
+            // Per-band sums, added in band order.
+            let mut parts = Vec::with_capacity(self.bands.len());
+            let mut rest = &mut self.u[..];
+            for band in &self.bands {
+                let (head, tail) = rest.split_at_mut(band.k1 - band.k0);
+                parts.push((band, head));
+                rest = tail;
             }
-        }
+            let spans = &self.spans;
+            let sums = map_bands(parts, |(band, u)| {
+                ctx.spans(&spans[band.s0..band.s1], band.k0, u)
+            });
+            let mut total = (0.0f64, 0usize, 0.0f64, 0.0f64);
+            for (g, n, mi, ma) in sums {
+                total = (total.0 + g, total.1 + n, total.2 + mi, total.3 + ma);
+            }
+            total
+        } else {
+            ctx.spans(&self.spans, 0, &mut self.u)
+        };
         if n_in == 0 {
             return Err(Error::Degenerate { level: 0 });
         }
@@ -1446,97 +1445,243 @@ impl Workspace {
         } else {
             (0, 0)
         };
-        // Tap positions once per pixel (one 32-bit division for the second frame), then the box.
-        self.pos.clear();
+        // Tap positions once per pixel (one 32-bit division for the second frame), then the box,
+        // and each span's range of rows; by bands for large regions (min and max do not depend
+        // on the order).
+        self.pos.resize(self.idx.len(), (0, 0));
+        self.span_rows.resize(self.spans.len(), (0, 0));
         let w1 = l1.map_or(1, |l| l.width as u32);
-        for k in 0..self.idx.len() {
-            self.pos.push(match l1 {
-                None => (self.ax[k] as u32, self.ay[k] as u32),
-                Some(_) => {
-                    let y = self.qi[k] / w1;
-                    (self.qi[k] - y * w1, y)
+        let (spans, qi, valid) = (&self.spans[..], &self.qi[..], &self.valid[..]);
+        let positions = |sp0: usize, kb: usize, pos: &mut [(u32, u32)], rows: &mut [(u32, u32)]| {
+            let mut bbox = (u32::MAX, u32::MAX, 0u32, 0u32);
+            for (t, sp) in spans[sp0..sp0 + rows.len()].iter().enumerate() {
+                let (mut lo, mut hi) = (u32::MAX, 0u32);
+                for k in sp.k0..sp.k0 + sp.len {
+                    let (x, y) = match l1 {
+                        None => ((sp.i0 + k - sp.k0) as u32, sp.j as u32),
+                        Some(_) => {
+                            let y = qi[k] / w1;
+                            (qi[k] - y * w1, y)
+                        }
+                    };
+                    pos[k - kb] = (x, y);
+                    if valid[k] != 0 {
+                        (bbox.0, bbox.2) = (bbox.0.min(x), bbox.2.max(x));
+                        (lo, hi) = (lo.min(y), hi.max(y));
+                    }
                 }
-            });
-        }
-        let (mut minx, mut miny, mut maxx, mut maxy) = (usize::MAX, usize::MAX, 0usize, 0usize);
-        for (&(x, y), &v) in self.pos.iter().zip(&self.valid) {
-            if v == 0 {
-                continue;
+                (bbox.1, bbox.3) = (bbox.1.min(lo), bbox.3.max(hi));
+                rows[t] = (lo, hi);
             }
-            minx = minx.min(x as usize);
-            maxx = maxx.max(x as usize);
-            miny = miny.min(y as usize);
-            maxy = maxy.max(y as usize);
-        }
+            bbox
+        };
+        let (minx, miny, maxx, maxy) = if self.parallel() {
+            let mut parts = Vec::with_capacity(self.bands.len());
+            let (mut pos, mut rows) = (&mut self.pos[..], &mut self.span_rows[..]);
+            for band in &self.bands {
+                let (p, p_rest) = pos.split_at_mut(band.k1 - band.k0);
+                let (r, r_rest) = rows.split_at_mut(band.s1 - band.s0);
+                parts.push((band, p, r));
+                (pos, rows) = (p_rest, r_rest);
+            }
+            map_bands(parts, |(band, p, r)| positions(band.s0, band.k0, p, r))
+                .into_iter()
+                .fold((u32::MAX, u32::MAX, 0, 0), |a, b| {
+                    (a.0.min(b.0), a.1.min(b.1), a.2.max(b.2), a.3.max(b.3))
+                })
+        } else {
+            positions(0, 0, &mut self.pos, &mut self.span_rows)
+        };
         if minx > maxx {
             return Mat7::zeros();
         }
+        let (minx, miny, maxx, maxy) = (minx as usize, miny as usize, maxx as usize, maxy as usize);
         let ox = minx as isize - (tap_lo + pad) as isize;
         let oy = miny as isize - (tap_lo + pad) as isize;
         let bw = maxx - minx + 1 + tap_lo + tap_hi + 2 * pad;
         let bh = maxy - miny + 1 + tap_lo + tap_hi + 2 * pad;
-        let plane = bw * bh;
-        self.planes.clear();
-        self.planes.resize(n * plane, 0.0);
-        for k in 0..self.idx.len() {
-            if self.valid[k] == 0 {
+        // Large regions: bands of grid rows, each scattering the pixels whose taps reach its rows
+        // or the smoothing's halo around them, convolving, and summing the outer products over
+        // its own rows only. The cut depends only on the grid, and the bands' sums are added in
+        // order, so the result does not depend on the number of threads.
+        let nb = if self.bands.len() > 1 {
+            bh.div_ceil(GRID_BAND_ROWS)
+        } else {
+            1
+        };
+        let rows_per = bh.div_ceil(nb);
+        if self.grids.len() < nb {
+            self.grids.resize_with(nb, Default::default);
+        }
+        let grid = Grid {
+            n,
+            bw,
+            bh,
+            ox,
+            oy,
+            pad,
+            taps: (tap_lo, tap_hi),
+            presmooth,
+            l1,
+            u: &self.u,
+            pos: &self.pos,
+            valid: &self.valid,
+            fx: &self.fx,
+            fy: &self.fy,
+            spans: &self.spans,
+            span_rows: &self.span_rows,
+        };
+        let items: Vec<_> = self
+            .grids
+            .iter_mut()
+            .take(nb)
+            .enumerate()
+            .map(|(b, buf)| (b * rows_per, ((b + 1) * rows_per).min(bh), buf))
+            .collect();
+        let parts = map_bands(items, |(r0, r1, (planes, tmp))| {
+            grid.band(r0, r1, planes, tmp)
+        });
+        let mut m = Mat7::zeros();
+        for part in parts {
+            m += part;
+        }
+        m
+    }
+}
+
+/// Grid rows per band of the covariance grid for large regions (see `Workspace::meat`).
+const GRID_BAND_ROWS: usize = 128;
+
+/// The covariance grid of one frame: `n` planes of `bw`×`bh` cells (origin (`ox`, `oy`) in the
+/// level), onto which the per-pixel vectors `u` are scattered at `pos` (through the interpolation
+/// taps at fractions (`fx`, `fy`) for the second frame, `l1`), then convolved.
+struct Grid<'a> {
+    n: usize,
+    bw: usize,
+    bh: usize,
+    ox: isize,
+    oy: isize,
+    /// Half-width of the smoothing kernel (0 without pre-smoothing).
+    pad: usize,
+    /// Taps before and after the sample position (1 and 2 for the second frame, else 0).
+    taps: (usize, usize),
+    presmooth: bool,
+    l1: Option<&'a Level>,
+    u: &'a [[f32; 8]],
+    pos: &'a [(u32, u32)],
+    valid: &'a [u8],
+    fx: &'a [f32],
+    fy: &'a [f32],
+    spans: &'a [Span],
+    /// Per span, the lowest and highest sample row of its valid pixels.
+    span_rows: &'a [(u32, u32)],
+}
+
+impl Grid<'_> {
+    /// Σ v vᵀ over grid rows `r0..r1`, computed on rows `r0 − pad .. r1 + pad` (the halo the
+    /// convolution reads) in `planes`, with `tmp` for the convolution.
+    fn band(&self, r0: usize, r1: usize, planes: &mut Vec<f32>, tmp: &mut Vec<f32>) -> Mat7 {
+        let (n, bw) = (self.n, self.bw);
+        let (lr0, lr1) = (r0.saturating_sub(self.pad), (r1 + self.pad).min(self.bh));
+        let lh = lr1 - lr0;
+        let plane = bw * lh;
+        planes.clear();
+        planes.resize(n * plane, 0.0);
+        let (tap_lo, tap_hi) = self.taps;
+        let ntap = tap_lo + tap_hi + 1;
+        for (sp, &(lo, hi)) in self.spans.iter().zip(self.span_rows) {
+            // Grid rows the span's taps reach.
+            if lo > hi {
                 continue;
             }
-            let u = self.u[k];
-            if u[..n].iter().all(|&v| v == 0.0) {
+            let first = (lo as isize - tap_lo as isize - self.oy) as usize;
+            let last = (hi as isize - tap_lo as isize - self.oy) as usize + ntap;
+            if last <= lr0 || first >= lr1 {
                 continue;
             }
-            let (x, y) = (self.pos[k].0 as usize, self.pos[k].1 as usize);
-            match l1 {
-                None => {
-                    let cell = (y as isize - oy) as usize * bw + (x as isize - ox) as usize;
-                    for (a, ua) in u.iter().enumerate().take(n) {
-                        self.planes[a * plane + cell] = *ua;
-                    }
+            for k in sp.k0..sp.k0 + sp.len {
+                if self.valid[k] == 0 {
+                    continue;
                 }
-                Some(l) => {
-                    let (fx, fy) = (self.fx[k], self.fy[k]);
-                    // The same taps as `evaluate`: cubic inside, bilinear on the border.
-                    let (wx, wy) = if x >= 1 && y >= 1 && x + 2 < l.width && y + 2 < l.height {
-                        (cubic_weights(fx), cubic_weights(fy))
-                    } else {
-                        ([0.0, 1.0 - fx, fx, 0.0], [0.0, 1.0 - fy, fy, 0.0])
-                    };
-                    let x0 = (x as isize - 1 - ox) as usize;
-                    let y0 = (y as isize - 1 - oy) as usize;
-                    for (a, &ua) in u.iter().enumerate().take(n) {
-                        let p = &mut self.planes[a * plane..(a + 1) * plane];
-                        for (r, wyr) in wy.iter().enumerate() {
-                            let row = &mut p[(y0 + r) * bw + x0..(y0 + r) * bw + x0 + 4];
-                            let s = wyr * ua;
-                            for (cell, wxc) in row.iter_mut().zip(wx) {
-                                *cell += s * wxc;
+                let u = &self.u[k];
+                if u[..n].iter().all(|&v| v == 0.0) {
+                    continue;
+                }
+                let (x, y) = (self.pos[k].0 as usize, self.pos[k].1 as usize);
+                let gy = (y as isize - tap_lo as isize - self.oy) as usize;
+                if gy + ntap <= lr0 || gy >= lr1 {
+                    continue;
+                }
+                match self.l1 {
+                    None => {
+                        let cell = (gy - lr0) * bw + (x as isize - self.ox) as usize;
+                        for (a, ua) in u.iter().enumerate().take(n) {
+                            planes[a * plane + cell] = *ua;
+                        }
+                    }
+                    Some(l) => {
+                        let (fx, fy) = (self.fx[k], self.fy[k]);
+                        // The same taps as `evaluate`: cubic inside, bilinear on the border.
+                        let (wx, wy) = if x >= 1 && y >= 1 && x + 2 < l.width && y + 2 < l.height {
+                            (cubic_weights(fx), cubic_weights(fy))
+                        } else {
+                            ([0.0, 1.0 - fx, fx, 0.0], [0.0, 1.0 - fy, fy, 0.0])
+                        };
+                        let x0 = (x as isize - 1 - self.ox) as usize;
+                        if gy >= lr0 && gy + 4 <= lr1 {
+                            let y0 = gy - lr0;
+                            for (a, &ua) in u.iter().enumerate().take(n) {
+                                let p = &mut planes[a * plane..(a + 1) * plane];
+                                for (r, wyr) in wy.iter().enumerate() {
+                                    let row = &mut p[(y0 + r) * bw + x0..(y0 + r) * bw + x0 + 4];
+                                    let s = wyr * ua;
+                                    for (cell, wxc) in row.iter_mut().zip(wx) {
+                                        *cell += s * wxc;
+                                    }
+                                }
+                            }
+                        } else {
+                            // Straddles the band's edge: only the rows inside.
+                            for (a, &ua) in u.iter().enumerate().take(n) {
+                                let p = &mut planes[a * plane..(a + 1) * plane];
+                                for (r, wyr) in wy.iter().enumerate() {
+                                    let g = gy + r;
+                                    if g < lr0 || g >= lr1 {
+                                        continue;
+                                    }
+                                    let row = &mut p[(g - lr0) * bw + x0..(g - lr0) * bw + x0 + 4];
+                                    let s = wyr * ua;
+                                    for (cell, wxc) in row.iter_mut().zip(wx) {
+                                        *cell += s * wxc;
+                                    }
+                                }
                             }
                         }
                     }
                 }
             }
         }
-        if presmooth {
-            for p in self.planes.chunks_exact_mut(plane) {
-                convolve_zero(p, bw, bh, &mut self.tmp);
+        if self.presmooth {
+            for p in planes.chunks_exact_mut(plane) {
+                convolve_zero(p, bw, lh, tmp);
             }
         }
-        // Outer products: all planes read together, 8 cells at a time in f32 lanes.
+        // Outer products over the band's own rows: all planes read together, 8 cells at a time.
+        let (c0, c1) = ((r0 - lr0) * bw, (r1 - lr0) * bw);
         match n {
-            2 => outer_sum::<2>(&self.planes, plane),
-            3 => outer_sum::<3>(&self.planes, plane),
-            4 => outer_sum::<4>(&self.planes, plane),
-            6 => outer_sum::<6>(&self.planes, plane),
-            _ => outer_sum::<7>(&self.planes, plane),
+            2 => outer_sum::<2>(planes, plane, c0, c1),
+            3 => outer_sum::<3>(planes, plane, c0, c1),
+            4 => outer_sum::<4>(planes, plane, c0, c1),
+            6 => outer_sum::<6>(planes, plane, c0, c1),
+            _ => outer_sum::<7>(planes, plane, c0, c1),
         }
     }
 }
 
-/// Σ_s v(s) v(s)ᵀ over the cells of `N` consecutive planes of `len` cells each: one pass reading
+/// Σ_s v(s) v(s)ᵀ over cells `c0..c1` of `N` consecutive planes of `len` cells each: one pass reading
 /// eight cells of every plane at a time, upper triangle in f32 lanes flushed to f64 every 64
 /// groups (512 cells) so that the f32 sums stay short.
-fn outer_sum<const N: usize>(planes: &[f32], len: usize) -> Mat7 {
+fn outer_sum<const N: usize>(planes: &[f32], len: usize, c0: usize, c1: usize) -> Mat7 {
     let mut lanes = [[[0.0f32; 8]; N]; N];
     let mut total = [[0.0f64; N]; N];
     let flush = |lanes: &mut [[[f32; 8]; N]; N], total: &mut [[f64; N]; N]| {
@@ -1547,9 +1692,9 @@ fn outer_sum<const N: usize>(planes: &[f32], len: usize) -> Mat7 {
             }
         }
     };
-    let (mut t, mut groups) = (0, 0);
-    while t < len {
-        let cnt = (len - t).min(8);
+    let (mut t, mut groups) = (c0, 0);
+    while t < c1 {
+        let cnt = (c1 - t).min(8);
         let v: [[f32; 8]; N] = std::array::from_fn(|a| {
             let mut x = [0.0f32; 8];
             x[..cnt].copy_from_slice(&planes[a * len + t..a * len + t + cnt]);
@@ -1876,7 +2021,7 @@ mod tests {
             let planes: Vec<f32> = (0..3 * w * h)
                 .map(|i| ((i * 53 % 13) as f32) / 13.0 - 0.5)
                 .collect();
-            let m = outer_sum::<3>(&planes, w * h);
+            let m = outer_sum::<3>(&planes, w * h, 0, w * h);
             for a in 0..3 {
                 for b in 0..3 {
                     let want: f64 = (0..w * h)
@@ -1939,15 +2084,16 @@ mod tests {
             let (n, ng) = (spec.len(), spec.model.geometric_len());
             let (mut hr, mut br, mut hpr) = (Mat7::zeros(), Vec7::zeros(), Mat7::zeros());
             let mut j = [0.0f64; 7];
-            for k in 0..ws.idx.len() {
+            let pixels = ws
+                .spans
+                .iter()
+                .flat_map(|sp| (0..sp.len).map(move |t| (sp.k0 + t, sp.i0 + t, sp.j)));
+            for (k, i, jj) in pixels {
                 if ws.valid[k] == 0 {
                     continue;
                 }
                 let r = f64::from(ws.res[k]);
-                let (x, y) = (
-                    f64::from(ws.ax[k]) - origin[0],
-                    f64::from(ws.ay[k]) - origin[1],
-                );
+                let (x, y) = (i as f64 - origin[0], jj as f64 - origin[1]);
                 spec.model
                     .gradient_row(f64::from(ws.gx[k]), f64::from(ws.gy[k]), x, y, &mut j);
                 if spec.offset {
@@ -1993,6 +2139,289 @@ mod tests {
         assert!(r.converged && (r.params[0] - 4.0).abs() < 0.01, "{r:?}");
         let f = r.inlier_fraction;
         assert!((1.0 - 12.0 / 128.0..=1.0 - 3.5 / 128.0).contains(&f), "{f}");
+    }
+}
+
+/// Pixels per band: large regions are cut into bands of whole row spans of at least this many
+/// pixels, which are processed concurrently with the `parallel` feature (see [`Band`]).
+const BAND_PIXELS: usize = 8192;
+
+/// Consecutive spans `s0..s1` of the region, holding pixels `k0..k1`. The cut depends only on the
+/// region (never on the number of threads), and every per-band partial sum is combined in band
+/// order, so results are bit-identical whether bands run in parallel or not.
+#[derive(Debug, Clone, Copy, Default)]
+struct Band {
+    s0: usize,
+    s1: usize,
+    k0: usize,
+    k1: usize,
+}
+
+/// `f` over `items` in order: concurrently on rayon's pool with the `parallel` feature (and more
+/// than one item), sequentially otherwise. The results come back in the items' order.
+fn map_bands<I: Send, T: Send>(items: Vec<I>, f: impl Fn(I) -> T + Sync + Send) -> Vec<T> {
+    #[cfg(feature = "parallel")]
+    if items.len() > 1 {
+        use rayon::prelude::*;
+        return items.into_par_iter().map(f).collect();
+    }
+    items.into_iter().map(f).collect()
+}
+
+/// The per-pixel outputs of `evaluate` for a run of pixels.
+struct Samples<'a> {
+    res: &'a mut [f32],
+    gx: &'a mut [f32],
+    gy: &'a mut [f32],
+    fx: &'a mut [f32],
+    fy: &'a mut [f32],
+    qi: &'a mut [u32],
+    valid: &'a mut [u8],
+}
+
+impl<'a> Samples<'a> {
+    /// The first `mid` pixels and the rest.
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        let (res, res2) = self.res.split_at_mut(mid);
+        let (gx, gx2) = self.gx.split_at_mut(mid);
+        let (gy, gy2) = self.gy.split_at_mut(mid);
+        let (fx, fx2) = self.fx.split_at_mut(mid);
+        let (fy, fy2) = self.fy.split_at_mut(mid);
+        let (qi, qi2) = self.qi.split_at_mut(mid);
+        let (valid, valid2) = self.valid.split_at_mut(mid);
+        (
+            Self {
+                res,
+                gx,
+                gy,
+                fx,
+                fy,
+                qi,
+                valid,
+            },
+            Self {
+                res: res2,
+                gx: gx2,
+                gy: gy2,
+                fx: fx2,
+                fy: fy2,
+                qi: qi2,
+                valid: valid2,
+            },
+        )
+    }
+}
+
+/// The warp of `evaluate` in the second frame's window: q = c + B·r, the gradient map
+/// (I + D)^−T, the intensity offset, both levels, and whether this is full resolution.
+struct Warp<'l> {
+    c: [f64; 2],
+    b: [f64; 4],
+    t: [f32; 4],
+    offset: f32,
+    l0: &'l Level,
+    l1: &'l Level,
+    full_res: bool,
+}
+
+impl Warp<'_> {
+    /// `evaluate` over `spans`, whose pixels start at entry `kb` (where `out` starts); `idx` is
+    /// the whole pixel list. Returns the number of valid samples.
+    fn spans(&self, spans: &[Span], idx: &[u32], kb: usize, out: Samples<'_>) -> usize {
+        let [cx, cy] = self.c;
+        let [bx1, bx2, by1, by2] = self.b;
+        let [t11, t12, t21, t22] = self.t;
+        let c = self.offset;
+        let (l0, l1) = (self.l0, self.l1);
+        let (w1, h1) = (l1.width, l1.height);
+        let (xmax, ymax) = ((w1 - 1) as f64, (h1 - 1) as f64);
+        let (d1, d0) = (&l1.data[..], &l0.data[..]);
+        let mut n_valid = 0;
+        if self.full_res {
+            // Full resolution: the sample loop computes only the residual and where it was taken;
+            // the Jacobian's gradients (the first frame's, mapped through (I + D)^−T) are read from
+            // contiguous rows in a second, vectorisable loop. A span's pixels are consecutive in
+            // the first frame's level, so its rows there are plain slices.
+            for sp in spans {
+                let y = sp.j as f64;
+                let (qx0, qy0) = (cx + bx2 * y, cy + by2 * y);
+                let r = sp.k0 - kb..sp.k0 - kb + sp.len;
+                let first = idx[sp.k0] as usize;
+                let z0 = &d0[first..first + sp.len];
+                // Pass 1: where each sample falls (kept: the covariance reads it), and which taps
+                // it uses: `valid` is 2 for the bicubic interior, 1 for the bilinear border.
+                let pos = out.fx[r.clone()]
+                    .iter_mut()
+                    .zip(&mut out.fy[r.clone()])
+                    .zip(&mut out.qi[r.clone()])
+                    .zip(&mut out.valid[r.clone()]);
+                for (t, (((fxo, fyo), qio), valid)) in pos.enumerate() {
+                    let x = (sp.i0 + t) as f64;
+                    *valid = match Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1) {
+                        Some(Sample {
+                            ix,
+                            iy,
+                            fx,
+                            fy,
+                            i00,
+                        }) => {
+                            (*fxo, *fyo, *qio) = (fx, fy, i00 as u32);
+                            if ix >= 1 && iy >= 1 && ix + 2 < w1 && iy + 2 < h1 {
+                                2
+                            } else {
+                                1
+                            }
+                        }
+                        None => 0,
+                    };
+                }
+                // Pass 2: the values. Bicubic: bilinear interpolation error on fine texture would
+                // bias the estimate and inflate the residual scale. (Two short loops keep the
+                // interpolation's operands in registers; one long loop spilled them.)
+                let vals = out.res[r.clone()]
+                    .iter_mut()
+                    .zip(&out.fx[r.clone()])
+                    .zip(&out.fy[r.clone()])
+                    .zip(&out.qi[r.clone()])
+                    .zip(&out.valid[r.clone()])
+                    .zip(z0);
+                for (((((res, &fx), &fy), &qi), &valid), &z0) in vals {
+                    let i00 = qi as usize;
+                    let v = match valid {
+                        0 => continue,
+                        2 => bicubic(d1, i00, w1, fx, fy),
+                        _ => bilinear(d1, i00, w1, fx, fy),
+                    };
+                    *res = v - z0 - c;
+                    n_valid += 1;
+                }
+                let (g0x, g0y) = (&l0.gx[first..first + sp.len], &l0.gy[first..first + sp.len]);
+                let grads = out.gx[r.clone()]
+                    .iter_mut()
+                    .zip(&mut out.gy[r])
+                    .zip(g0x)
+                    .zip(g0y);
+                for (((gxo, gyo), &ax), &ay) in grads {
+                    *gxo = t11 * ax + t12 * ay;
+                    *gyo = t21 * ax + t22 * ay;
+                }
+            }
+            return n_valid;
+        }
+        // Coarse levels: bilinear values and second-frame gradients in the sample loop, then the
+        // first frame's mapped gradients averaged in from contiguous rows (see above). The sample
+        // positions are not stored: only the full-resolution covariance reads them.
+        for sp in spans {
+            let y = sp.j as f64;
+            let (qx0, qy0) = (cx + bx2 * y, cy + by2 * y);
+            let r = sp.k0 - kb..sp.k0 - kb + sp.len;
+            let first = idx[sp.k0] as usize;
+            let z0 = &d0[first..first + sp.len];
+            let iter = out.res[r.clone()]
+                .iter_mut()
+                .zip(&mut out.gx[r.clone()])
+                .zip(&mut out.gy[r.clone()])
+                .zip(&mut out.valid[r.clone()])
+                .zip(z0);
+            for (t, ((((res, gxo), gyo), valid), &z0)) in iter.enumerate() {
+                let x = (sp.i0 + t) as f64;
+                let Some(Sample { fx, fy, i00, .. }) =
+                    Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1)
+                else {
+                    *valid = 0;
+                    continue;
+                };
+                *res = bilinear(d1, i00, w1, fx, fy) - z0 - c;
+                *gxo = bilinear(&l1.gx, i00, w1, fx, fy);
+                *gyo = bilinear(&l1.gy, i00, w1, fx, fy);
+                *valid = 1;
+                n_valid += 1;
+            }
+            let (g0x, g0y) = (&l0.gx[first..first + sp.len], &l0.gy[first..first + sp.len]);
+            let grads = out.gx[r.clone()]
+                .iter_mut()
+                .zip(&mut out.gy[r])
+                .zip(g0x)
+                .zip(g0y);
+            for (((gxo, gyo), &ax), &ay) in grads {
+                *gxo = 0.5 * (*gxo + t11 * ax + t12 * ay);
+                *gyo = 0.5 * (*gyo + t21 * ax + t22 * ay);
+            }
+        }
+        n_valid
+    }
+}
+
+/// The per-pixel vectors u = m E[ψ'] J of the covariance's meat, and the sums of the noise
+/// model (variance gains, inlier counts and weights).
+struct UVectors<'a> {
+    spec: ModelSpec,
+    e1: f32,
+    c: f64,
+    rejection: Option<f64>,
+    s: f64,
+    o: [f64; 2],
+    ka: f64,
+    table: &'a [f64; 65],
+    res: &'a [f32],
+    valid: &'a [u8],
+    m: &'a [f32],
+    gx: &'a [f32],
+    gy: &'a [f32],
+    fx: &'a [f32],
+    fy: &'a [f32],
+}
+
+impl UVectors<'_> {
+    /// Fills `u` (entries from `kb` on) over `spans`; returns (Σ variance gain, inlier count,
+    /// inlier weight, total weight).
+    fn spans(&self, spans: &[Span], kb: usize, u: &mut [[f32; 8]]) -> (f64, usize, f64, f64) {
+        let (spec, s, c, o) = (self.spec, self.s, self.c, self.o);
+        let ng = spec.model.geometric_len();
+        let ka = self.ka;
+        let q = |f: f64| self.table[((f * 64.0 + 0.5) as usize).min(64)];
+        let (mut gain, mut n_in, mut m_in, mut m_all) = (0.0f64, 0usize, 0.0f64, 0.0f64);
+        for sp in spans {
+            let y = (sp.j as f64 - o[1]) as f32;
+            let x_first = (sp.i0 as f64 - o[0]) as f32;
+            for k in sp.k0..sp.k0 + sp.len {
+                m_all += f64::from(self.m[k]);
+                if self.valid[k] == 0 {
+                    continue;
+                }
+                let z = f64::from(self.res[k]) / s;
+                if z.abs() < c {
+                    let (fx, fy) = (f64::from(self.fx[k]), f64::from(self.fy[k]));
+                    gain += ka * ka + q(fx) * q(fy);
+                    n_in += 1;
+                    m_in += f64::from(self.m[k]);
+                }
+                // Pixels a redescending ρ rejects carry no noise into Θ̂.
+                if self.rejection.is_some_and(|r| z.abs() >= r) {
+                    continue;
+                }
+                let me = self.m[k] * self.e1;
+                let (gx, gy) = (self.gx[k] * me, self.gy[k] * me);
+                let x = x_first + (k - sp.k0) as f32;
+                let u = &mut u[k - kb];
+                match spec.model {
+                    MotionModel::Translation => {
+                        (u[0], u[1]) = (gx, gy);
+                    }
+                    MotionModel::Scale => {
+                        (u[0], u[1], u[2]) = (gx, gy, gx * x + gy * y);
+                    }
+                    MotionModel::Affine => {
+                        (u[0], u[1], u[2]) = (gx, gx * x, gx * y);
+                        (u[3], u[4], u[5]) = (gy, gy * x, gy * y);
+                    }
+                }
+                if spec.offset {
+                    u[ng] = -me;
+                }
+            }
+        }
+        (gain, n_in, m_in, m_all)
     }
 }
 

@@ -192,32 +192,55 @@ pub(crate) fn robust_scale_from(
     s
 }
 
+/// Values per block of [`truncated_sum`].
+const BLOCK: usize = 1024;
+
 /// Σ r² and the count over valid residuals with |r| < t: branch-free, eight f32 lanes per block
-/// of 1024 values, blocks summed in f64.
+/// of [`BLOCK`] values, the blocks' sums added in f64 in block order (whether the blocks were
+/// computed concurrently — long inputs with the `parallel` feature — or not).
 fn truncated_sum(res: &[f32], valid: &[u8], t: f32) -> (f64, usize) {
-    let (mut sum, mut n) = (0.0f64, 0usize);
-    for (rb, vb) in res.chunks(1024).zip(valid.chunks(1024)) {
-        let mut lanes = [0.0f32; 8];
-        let mut counts = [0u32; 8];
-        let (rc, vc) = (rb.chunks_exact(8), vb.chunks_exact(8));
-        let (rt, vt) = (rc.remainder(), vc.remainder());
-        for (r8, v8) in rc.zip(vc) {
-            for l in 0..8 {
-                // `&`, not `&&`: no branch, so the lanes vectorise.
-                let keep = (v8[l] != 0) & (r8[l].abs() < t);
-                lanes[l] += if keep { r8[l] * r8[l] } else { 0.0 };
-                counts[l] += u32::from(keep);
-            }
-        }
-        for (&r, &v) in rt.iter().zip(vt) {
-            if v != 0 && r.abs() < t {
-                sum += f64::from(r * r);
-                n += 1;
-            }
-        }
-        sum += lanes.iter().map(|&v| f64::from(v)).sum::<f64>();
-        n += counts.iter().map(|&c| c as usize).sum::<usize>();
+    #[cfg(feature = "parallel")]
+    if res.len() > 16 * BLOCK {
+        use rayon::prelude::*;
+        let parts: Vec<(f64, usize)> = res
+            .par_chunks(BLOCK)
+            .zip(valid.par_chunks(BLOCK))
+            .map(|(rb, vb)| truncated_block(rb, vb, t))
+            .collect();
+        return parts
+            .into_iter()
+            .fold((0.0, 0), |(s, n), (bs, bn)| (s + bs, n + bn));
     }
+    res.chunks(BLOCK)
+        .zip(valid.chunks(BLOCK))
+        .map(|(rb, vb)| truncated_block(rb, vb, t))
+        .fold((0.0, 0), |(s, n), (bs, bn)| (s + bs, n + bn))
+}
+
+/// [`truncated_sum`] of one block.
+#[inline]
+fn truncated_block(rb: &[f32], vb: &[u8], t: f32) -> (f64, usize) {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    let mut lanes = [0.0f32; 8];
+    let mut counts = [0u32; 8];
+    let (rc, vc) = (rb.chunks_exact(8), vb.chunks_exact(8));
+    let (rt, vt) = (rc.remainder(), vc.remainder());
+    for (r8, v8) in rc.zip(vc) {
+        for l in 0..8 {
+            // `&`, not `&&`: no branch, so the lanes vectorise.
+            let keep = (v8[l] != 0) & (r8[l].abs() < t);
+            lanes[l] += if keep { r8[l] * r8[l] } else { 0.0 };
+            counts[l] += u32::from(keep);
+        }
+    }
+    for (&r, &v) in rt.iter().zip(vt) {
+        if v != 0 && r.abs() < t {
+            sum += f64::from(r * r);
+            n += 1;
+        }
+    }
+    sum += lanes.iter().map(|&v| f64::from(v)).sum::<f64>();
+    n += counts.iter().map(|&c| c as usize).sum::<usize>();
     (sum, n)
 }
 

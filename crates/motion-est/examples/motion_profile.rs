@@ -1,0 +1,126 @@
+//! Profiling driver: `cargo run --release -p motion-est --example motion_profile -- CASE N [THREADS]`
+//! with CASE `full` (full-frame affine incl. both pyramids, as the bench) or `track` (the bench's
+//! 22×28 ellipse with `Settings::tracking()` on shared pyramids). Prints wall time per estimate.
+#![allow(missing_docs, clippy::unwrap_used)]
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use motion_est::{
+    Ellipse, FrameBuffers, ImageView, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region,
+    Settings, Workspace,
+};
+
+const W: usize = 320;
+const H: usize = 240;
+
+/// The bench's pair: 60 sinusoids, (3, −2) + 3 % zoom about the centre.
+fn pair(zoom: f64) -> (Vec<f32>, Vec<f32>) {
+    let comps: Vec<[f64; 3]> = (0..60)
+        .map(|i| {
+            let f = i as f64;
+            let lambda = 3.0 + 37.0 * ((f * 0.618_034) % 1.0);
+            let dir = f * 2.399_963;
+            let k = std::f64::consts::TAU / lambda;
+            [k * dir.cos(), k * dir.sin(), f * 1.3]
+        })
+        .collect();
+    let tex = |x: f64, y: f64| {
+        128.0
+            + 7.3
+                * comps
+                    .iter()
+                    .map(|c| (c[0] * x + c[1] * y + c[2]).sin())
+                    .sum::<f64>()
+    };
+    let (cx, cy) = (159.5, 119.5);
+    let f0 = (0..W * H)
+        .map(|k| tex((k % W) as f64, (k / W) as f64) as f32)
+        .collect();
+    let f1 = (0..W * H)
+        .map(|k| {
+            let (x, y) = ((k % W) as f64 - cx, (k / W) as f64 - cy);
+            tex(cx + (x - 3.0) / (1.0 + zoom), cy + (y + 2.0) / (1.0 + zoom)) as f32
+        })
+        .collect();
+    (f0, f1)
+}
+
+/// Runs `f` `n` times in 20 batches; the minimum and median batch means (ms): the minimum is
+/// the figure least affected by other processes on a shared machine.
+fn batches(n: usize, mut f: impl FnMut()) -> String {
+    let per = (n / 20).max(1);
+    let mut means: Vec<f64> = (0..20)
+        .map(|_| {
+            let t = Instant::now();
+            for _ in 0..per {
+                f();
+            }
+            t.elapsed().as_secs_f64() * 1e3 / per as f64
+        })
+        .collect();
+    means.sort_by(f64::total_cmp);
+    format!("min {:.4} ms, median {:.4} ms", means[0], means[10])
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let case = args.get(1).map_or("full", String::as_str).to_string();
+    let n: usize = args.get(2).map_or(100, |s| s.parse().unwrap());
+    let threads: usize = args.get(3).map_or(0, |s| s.parse().unwrap());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    let (f0, f1) = pair(0.03);
+    let v0 = ImageView::new(W, H, &f0).unwrap();
+    let v1 = ImageView::new(W, H, &f1).unwrap();
+    let spec = ModelSpec::new(MotionModel::Affine, false);
+    pool.install(|| match case.as_str() {
+        "full" => {
+            let est = MotionEstimator::new(Settings::default()).unwrap();
+            let mut bufs = FrameBuffers::default();
+            let times = batches(n, || {
+                black_box(
+                    est.estimate_images_into(v0, v1, &Region::Full, spec, None, &mut bufs)
+                        .unwrap(),
+                );
+            });
+            println!("full: {times}");
+            let r = est
+                .estimate_images_into(v0, v1, &Region::Full, spec, None, &mut bufs)
+                .unwrap();
+            let h = r
+                .params
+                .iter()
+                .chain(&r.covariance)
+                .fold(0u64, |h, v| h.rotate_left(7) ^ v.to_bits());
+            println!("result bits hash {h:016x}");
+        }
+        _ => {
+            let est = MotionEstimator::new(Settings::tracking()).unwrap();
+            let (mut p0, mut p1) = (Pyramid::new(), Pyramid::new());
+            est.build_pyramid_into(v0, &mut p0).unwrap();
+            est.build_pyramid_into(v1, &mut p1).unwrap();
+            let mut ws = Workspace::new();
+            let ell = Region::Ellipse(Ellipse {
+                cx: 159.5,
+                cy: 119.5,
+                a: 22.0,
+                b: 28.0,
+                theta: 0.0,
+            });
+            let t = Instant::now();
+            for _ in 0..n {
+                black_box(
+                    est.estimate(&p0, &p1, &ell, spec, Some([159.5, 119.5]), &mut ws)
+                        .unwrap(),
+                );
+            }
+            println!(
+                "track: {:.4} ms",
+                t.elapsed().as_secs_f64() * 1e3 / n as f64
+            );
+        }
+    });
+}
