@@ -10,7 +10,7 @@
 //! (the ratio form of Wu's likelihood, `LikelihoodSettings::likelihood_ratio`), ARC=1/0 and NEUTRAL=1/0
 //! (`LikelihoodSettings::occlusion_arc`, `neutral_hidden_lines`), LGR (κ of γ | locked,
 //! `DynamicsSettings::locked_gamma_rate`), LOCKLO, LOCKHI, PARTLO, PARTHI (the status HMM's γ
-//! ranges), V (per-seed
+//! ranges), TLP (its locked → partially occluded probability), V (per-seed
 //! lines), REACQ=1/0 (reacquisition jump on/off, `TrackerConfig::reacquisition`) with RQLOCK,
 //! RQRATE, RQMAX, RQSPREAD, RQGROW, RQPG, RQVG, RQSG, RQBACK, RQSHAPE (its settings). Diagnostics: TRACE (one line per frame), LAND=k (likelihood landscape at frame k),
 //! DUMP=k (frame k as a binary PGM on stdout). Besides the IoU it prints β̂ accuracy, γ̂ MAE and α̂
@@ -162,6 +162,11 @@ fn main() {
                 if let Some(v) = env(k) {
                     *slot = v;
                 }
+            }
+            if let Some(v) = env("TLP") {
+                // locked → partially occluded, taken from locked → locked.
+                sc.transition[0][1] = v;
+                sc.transition[0][0] = 1.0 - v - sc.transition[0][2];
             }
         }
         if std::env::var("OA1").is_ok() {
