@@ -8,10 +8,13 @@
 //! plain weighted mean), WIN and PD (Wu's window and detection probability), OA0 (no
 //! occlusion-aware proposal), WS0 (no warm start), DEFSET (accurate motion settings), RATIO=1
 //! (the ratio form of Wu's likelihood, `LikelihoodSettings::likelihood_ratio`), ARC=1/0 and NEUTRAL=1/0
-//! (`LikelihoodSettings::occlusion_arc`, `neutral_hidden_lines`), V (per-seed
+//! (`LikelihoodSettings::occlusion_arc`, `neutral_hidden_lines`), LGR (κ of γ | locked,
+//! `DynamicsSettings::locked_gamma_rate`), LOCKLO, LOCKHI, PARTLO, PARTHI (the status HMM's γ
+//! ranges), TLP (its locked → partially occluded probability), V (per-seed
 //! lines), REACQ=1/0 (reacquisition jump on/off, `TrackerConfig::reacquisition`) with RQLOCK,
 //! RQRATE, RQMAX, RQSPREAD, RQGROW, RQPG, RQVG, RQSG, RQBACK, RQSHAPE (its settings). Diagnostics: TRACE (one line per frame), LAND=k (likelihood landscape at frame k),
-//! DUMP=k (frame k as a binary PGM on stdout).
+//! DUMP=k (frame k as a binary PGM on stdout). Besides the IoU it prints β̂ accuracy, γ̂ MAE and α̂
+//! accuracy against the generator's truth (frame 0 left out, as `track eval switching`).
 
 use contour_obs::Ellipse;
 use scene_synth::{Scenario, ScenarioParams, Scene};
@@ -57,6 +60,8 @@ fn main() {
     let mut fails = 0;
     let mut ms = 0.0;
     let mut post_total = 0.0;
+    // β̂ accuracy, γ̂ MAE and α̂ accuracy against the truth (frame 0 left out), summed over seeds.
+    let mut hidden = [0.0; 3];
     // Frames after the last (almost) fully hidden one where the target is visible again: the
     // reacquisition window of the occlusion scene (empty on the other scenes).
     let vis: Vec<f64> = frames.iter().map(|(_, t)| t.visible_fraction).collect();
@@ -77,6 +82,9 @@ fn main() {
         }
         if let Some(v) = env("ST") {
             c.dynamics.sigma_translation = v;
+        }
+        if let Some(v) = env("LGR") {
+            c.dynamics.locked_gamma_rate = v;
         }
         if let Some(v) = env("SS") {
             c.dynamics.sigma_scale = v;
@@ -144,6 +152,23 @@ fn main() {
                 r.rollback = v as usize;
             }
         }
+        if let trackers::OcclusionMode::Status(sc) = &mut c.occlusion {
+            for (k, slot) in [
+                ("LOCKLO", &mut sc.locked.low),
+                ("LOCKHI", &mut sc.locked.high),
+                ("PARTLO", &mut sc.partially_occluded.low),
+                ("PARTHI", &mut sc.partially_occluded.high),
+            ] {
+                if let Some(v) = env(k) {
+                    *slot = v;
+                }
+            }
+            if let Some(v) = env("TLP") {
+                // locked → partially occluded, taken from locked → locked.
+                sc.transition[0][1] = v;
+                sc.transition[0][0] = 1.0 - v - sc.transition[0][2];
+            }
+        }
         if std::env::var("OA1").is_ok() {
             c.motion.occlusion_aware = true;
         }
@@ -158,6 +183,7 @@ fn main() {
         }
         let mut t = build(c).unwrap();
         let mut ious = vec![];
+        let (mut gerr, mut aok, mut bok, mut nh) = (0.0, 0.0, 0.0, 0.0);
         for (k, (img, truth)) in frames.iter().enumerate() {
             let d = scene_synth::to_f32(img);
             let f = Frame::new(img.width() as usize, img.height() as usize, &d).unwrap();
@@ -178,6 +204,22 @@ fn main() {
                 t.update(f).unwrap()
             };
             ms += est.millis;
+            if k > 0 {
+                nh += 1.0;
+                gerr += (est.gamma.unwrap_or(0.0) - (1.0 - truth.visible_fraction)).abs();
+                let ta = match truth.status {
+                    scene_synth::Status::Locked => 0,
+                    scene_synth::Status::Partial => 1,
+                    scene_synth::Status::Lost => 2,
+                };
+                aok += f64::from(u8::from(
+                    est.status.as_ref().map(|s| s.alpha_hat.index()) == Some(ta),
+                ));
+                bok += f64::from(u8::from(
+                    est.clutter.as_ref().map(|c| c.beta_hat + 1)
+                        == Some(truth.clutter_class.into()),
+                ));
+            }
             let b = est.bbox;
             let g = truth.bbox;
             let ix = (b[0] + b[2]).min(g.x + g.w) - b[0].max(g.x);
@@ -187,7 +229,7 @@ fn main() {
             ious.push(iou);
             if std::env::var("TRACE").is_ok() {
                 println!(
-                    "{k:3} ab ({:4.1},{:4.1}) truth ({:6.1},{:6.1}) vis {:.2} est ({:6.1},{:6.1}) iou {iou:.2} γ {:.2} α {:?} β {:?} ess {:.0}",
+                    "{k:3} ab ({:4.1},{:4.1}) truth ({:6.1},{:6.1}) vis {:.2} est ({:6.1},{:6.1}) iou {iou:.2} γ {:.2} α {:?} β {:?} (true {}) ess {:.0}",
                     est.ellipse.a,
                     est.ellipse.b,
                     e.cx,
@@ -198,6 +240,7 @@ fn main() {
                     est.gamma.unwrap_or(f64::NAN),
                     est.status.as_ref().map(|s| s.alpha_hat),
                     est.clutter.as_ref().map(|c| c.beta_hat),
+                    truth.clutter_class,
                     est.ess
                 );
             }
@@ -210,9 +253,15 @@ fn main() {
             fails += 1;
         }
         total += mean;
+        hidden[0] += bok / nh;
+        hidden[1] += gerr / nh;
+        hidden[2] += aok / nh;
         if std::env::var("V").is_ok() {
             println!(
-                "seed {seed}: mean IoU {mean:.3} after occlusion {post_mean:.3} fail {fail:?}"
+                "seed {seed}: mean IoU {mean:.3} after occlusion {post_mean:.3} fail {fail:?} β {:.3} γ MAE {:.3} α {:.3}",
+                bok / nh,
+                gerr / nh,
+                aok / nh
             );
         }
     }
@@ -225,6 +274,12 @@ fn main() {
         fails,
         seeds,
         ms / (seeds as f64 * frames.len() as f64)
+    );
+    println!(
+        "  β̂ {:.3}, γ̂ MAE {:.3}, α̂ {:.3} (means over seeds)",
+        hidden[0] / seeds as f64,
+        hidden[1] / seeds as f64,
+        hidden[2] / seeds as f64
     );
 }
 

@@ -197,7 +197,9 @@ impl ParticleTracker {
                 gamma: walk.initial().gamma,
                 ..default_status()
             },
-            OcclusionModel::Status(hmm) => hmm.sample_initial(&mut rng),
+            OcclusionModel::Status(hmm) => self
+                .dynamics
+                .locked_gamma(hmm, hmm.sample_initial(&mut rng)),
         };
         (clutter, status)
     }
