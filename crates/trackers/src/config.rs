@@ -261,8 +261,8 @@ pub const UNKNOWN_OCCLUDER_SHARE: f64 = 0.5;
 /// [`LikelihoodSettings::occlusion_arc`] and [`LikelihoodSettings::neutral_hidden_lines`]).
 /// w-occ keeps Wu's Eq. 11–12 as printed; full keeps the independent mixture, because with the
 /// arc its Table 1 S2 column (100 particles) fell from 100 % to 90 % over 10 trials and to 94 %
-/// over 50 (100 % without the arc), below the 95 % target, although its sweeps improved. Measured (sweep, 120 frames, 200 particles, seeds 1–4,
-/// mean IoU, in brackets the mean IoU after the full occlusion, lost tracks): `occlusion` w-eval
+/// over 50 (100 % without the arc), below the 95 % target, although its sweeps improved.
+/// Measured (sweep, 120 frames, 200 particles, seeds 1–4, mean IoU, in brackets the mean IoU after the full occlusion, lost tracks): `occlusion` w-eval
 /// 0.607 [0.814] → 0.731 [0.874], full 0.539 [0.504] → 0.645 [0.710]; `mclutter` w-eval
 /// 0.902 → 0.906, full 0.909 → 0.918; `distractor` w-eval 0.589 / 2 lost → 0.720 / 1, full
 /// 0.910 → 0.914; and γ̂ now rises while the target is hidden (docs/RESULTS.md).
