@@ -111,6 +111,9 @@ pub struct MeasurementLines {
     whole_observed: bool,
     /// The posed contour points and normals ((NaN, NaN): undefined), [`Contour::pose_all`].
     posed: Vec<(Vector2<f64>, Vector2<f64>)>,
+    /// The best instruction set of this processor (run-time detection), under which the line
+    /// scan is compiled.
+    arch: pulp::Arch,
 }
 
 /// Whether a line lies wholly inside the image: both end points c ± reach·n in
@@ -138,6 +141,34 @@ impl LineBounds {
             & (x1 <= self.xmax)
             & (y1 >= 0.0)
             & (y1 <= self.ymax)
+    }
+}
+
+/// [`MeasurementLines::scan_lines`] as an operation that [`pulp::Arch::dispatch`] compiles once
+/// per instruction set and runs under the best one of the processor.
+struct ScanLines<'a, 'b> {
+    lines: &'a mut MeasurementLines,
+    image: &'a GreyView<'b>,
+    contour: &'a Contour,
+    pose: &'a Affine2,
+    klo: i64,
+    khi: i64,
+}
+
+impl pulp::WithSimd for ScanLines<'_, '_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let Self {
+            lines,
+            image,
+            contour,
+            pose,
+            klo,
+            khi,
+        } = self;
+        lines.scan_lines_with(image, contour, pose, klo, khi);
     }
 }
 
@@ -180,6 +211,7 @@ impl MeasurementLines {
             scan: LineScan::default(),
             plan: Vec::with_capacity(n),
             posed: Vec::with_capacity(n),
+            arch: pulp::Arch::new(),
         })
     }
 
@@ -265,6 +297,27 @@ impl MeasurementLines {
     /// wholly inside the image in one [`LineScan`], the others marked for the general path.
     /// Each line's plan is then in `plan`. The pose must be finite.
     pub(crate) fn scan_lines(
+        &mut self,
+        image: &GreyView<'_>,
+        contour: &Contour,
+        pose: &Affine2,
+        klo: i64,
+        khi: i64,
+    ) {
+        let arch = self.arch;
+        arch.dispatch(ScanLines {
+            lines: self,
+            image,
+            contour,
+            pose,
+            klo,
+            khi,
+        });
+    }
+
+    /// [`Self::scan_lines`], inlined into the dispatched (feature-enabled) closure.
+    #[inline(always)]
+    fn scan_lines_with(
         &mut self,
         image: &GreyView<'_>,
         contour: &Contour,

@@ -71,6 +71,7 @@ impl LineScan {
     /// `klo ..= khi`: samples at `klo − 1 − r ..= khi + 1 + r`, responses at
     /// `klo − 1 ..= khi + 1`. Returns false when such lines do not fit the scan (too long, or a
     /// filter too wide); every line then takes the general path.
+    #[inline(always)]
     pub(crate) fn begin(
         &mut self,
         det: &EdgeDetector,
@@ -116,7 +117,7 @@ impl LineScan {
     /// points do, positions being linear in k. Positions are stepped in fixed point exactly as
     /// [`GreyView::sample_line`]'s unclamped loop; relative to the first sample's cell they fit
     /// an i32 (fewer than 64 samples, |n| ≤ 2). At most `max_lines` lines may be added.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn push(
         &mut self,
         image: &GreyView<'_>,
@@ -184,6 +185,7 @@ impl LineScan {
 
     /// Interpolates, filters and suppresses all lines added, leaving one edge mask per line:
     /// [`Self::mask`].
+    #[inline(always)]
     pub(crate) fn finish(&mut self, det: &EdgeDetector) {
         if self.lines == 0 {
             return;
