@@ -348,7 +348,7 @@ impl MeasurementLines {
                 fast,
             });
         }
-        self.scan.finish(&self.detector);
+        self.scan.finish(image, &self.detector);
     }
 
     /// One line through the fast scan alone: its index there, or `None` for the general path.
@@ -364,7 +364,7 @@ impl MeasurementLines {
             return None;
         }
         let line = self.plan_fast(image, centre, normal)?;
-        self.scan.finish(&self.detector);
+        self.scan.finish(image, &self.detector);
         Some(line)
     }
 
