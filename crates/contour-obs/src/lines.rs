@@ -328,24 +328,20 @@ impl MeasurementLines {
         self.plan.clear();
         let fits = self.scan.begin(&self.detector, klo, khi, contour.len());
         contour.pose_all(pose, &mut self.posed);
-        // The end-point test of every line in one branch-free pass, then the lines.
+        // The end-point test and the fixed-point set-up of every line in branch-free passes,
+        // then the lines.
         let bounds = self.bounds(image);
         self.inside.clear();
         self.inside
             .extend(self.posed.iter().map(|&(c, n)| bounds.holds(c, n)));
-        for i in 0..contour.len() {
-            let (centre, normal) = self.posed[i];
-            let normal = (!normal.x.is_nan()).then_some(normal);
-            let fast = match normal {
-                Some(n) if fits && self.inside[i] => {
-                    self.scan.push(image, (centre.x, centre.y), (n.x, n.y))
-                }
-                _ => None,
-            };
+        if fits {
+            self.scan.place(image, &self.posed, &self.inside);
+        }
+        for (i, &(centre, normal)) in self.posed.iter().enumerate() {
             self.plan.push(Planned {
                 centre,
-                normal,
-                fast,
+                normal: (!normal.x.is_nan()).then_some(normal),
+                fast: self.scan.scanned(i).then_some(i),
             });
         }
         self.scan.finish(image, &self.detector);
@@ -360,28 +356,17 @@ impl MeasurementLines {
         klo: i64,
         khi: i64,
     ) -> Option<usize> {
+        let n = normal?;
         if !self.scan.begin(&self.detector, klo, khi, 1) {
             return None;
         }
-        let line = self.plan_fast(image, centre, normal)?;
-        self.scan.finish(image, &self.detector);
-        Some(line)
-    }
-
-    /// Adds the line to the fast scan when it lies wholly inside the image ([`LineBounds`]);
-    /// [`LineScan::push`] then checks the fixed-point positions.
-    #[inline]
-    fn plan_fast(
-        &mut self,
-        image: &GreyView<'_>,
-        c: Vector2<f64>,
-        normal: Option<Vector2<f64>>,
-    ) -> Option<usize> {
-        let n = normal?;
-        if !self.bounds(image).holds(c, n) {
+        let inside = self.bounds(image).holds(centre, n);
+        self.scan.place(image, &[(centre, n)], &[inside]);
+        if !self.scan.scanned(0) {
             return None;
         }
-        self.scan.push(image, (c.x, c.y), (n.x, n.y))
+        self.scan.finish(image, &self.detector);
+        Some(0)
     }
 
     /// The end-point test of lines on `image`.

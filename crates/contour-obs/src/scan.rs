@@ -18,6 +18,8 @@
 //! vectors), which would stall the processor's store forwarding.
 
 use crate::image::FIX_BITS;
+use nalgebra::Vector2;
+
 use crate::{EdgeDetector, GreyView, Polarity};
 
 /// The most samples per line a scan takes; longer lines take the general path. 64 covers the
@@ -59,6 +61,8 @@ pub(crate) struct LineScan {
     s: Vec<f32>,
     /// Filter responses (entry k·n + l is centred on sample k + r of line l).
     d: Vec<f32>,
+    /// Per line: whether it is scanned ([`Self::place`]).
+    valid: Vec<bool>,
     /// Edge flags (0 or 1); entry j·n + l is candidate j of line l (its response j + 1).
     flag: Vec<u8>,
     /// The edge mask of each line after [`Self::finish`].
@@ -80,6 +84,7 @@ impl LineScan {
     ) -> bool {
         self.lines = 0;
         self.masks.clear();
+        self.valid.clear();
         for v in [
             &mut self.base,
             &mut self.x,
@@ -111,53 +116,85 @@ impl LineScan {
         true
     }
 
-    /// Adds the line c + k·n: returns its index in the scan, or `None` (nothing added) unless
-    /// its samples all lie in [0, w − 1) × [0, h − 1), that is both end points do, positions
-    /// being linear in k. Positions are stepped in fixed point exactly as
-    /// [`GreyView::sample_line`]'s unclamped loop; relative to the first sample's cell they fit
-    /// an i32 (fewer than 64 samples, |n| ≤ 2). At most `max_lines` lines may be added.
+    /// Places line l = c + k·n for every (c, n) of `lines` (n = (NaN, NaN): undefined) at lane
+    /// l of the scan, in one branch-free pass. A line is scanned ([`Self::scanned`]) when
+    /// `inside[l]` (its end points lie in the image, [`crate::lines`]'s test) and its samples
+    /// all lie in [0, w − 1) × [0, h − 1), that is both end points do in fixed point, positions
+    /// being linear in k; the other lanes read the first cell and nothing reads their masks.
+    /// Positions are stepped in fixed point exactly as [`GreyView::sample_line`]'s unclamped
+    /// loop; relative to the first sample's cell they fit an i32 (fewer than 64 samples,
+    /// |n| ≤ 2). At most `max_lines` lines.
     #[inline(always)]
-    pub(crate) fn push(
+    pub(crate) fn place(
         &mut self,
         image: &GreyView<'_>,
-        c: (f64, f64),
-        n: (f64, f64),
-    ) -> Option<usize> {
-        let (width, height) = (image.width(), image.height());
+        lines: &[(Vector2<f64>, Vector2<f64>)],
+        inside: &[bool],
+    ) {
+        let n = lines.len().min(inside.len());
+        if n * self.count > self.s.len() {
+            return;
+        }
+        let (width, height) = (image.width() as i64, image.height() as i64);
         let one = (1i64 << FIX_BITS) as f64;
         let fix = |v: f64| (v * one) as i64;
-        let (step_x, step_y) = (fix(n.0), fix(n.1));
         // |n| ≤ 2 keeps every relative position below 2⁶·2²⁵ = 2³¹, and an image below 2³¹
         // pixels every cell index.
-        let step_max = 2i64 << FIX_BITS;
-        if step_x.abs() > step_max
-            || step_y.abs() > step_max
-            || image.data().len() >= 1 << 31
-            || (self.lines + 1) * self.count > self.s.len()
-        {
-            return None;
-        }
+        let step_max = 2u64 << FIX_BITS;
+        let small = image.data().len() < 1 << 31;
         let lo = self.klo - 1 - self.radius as i64;
-        let (px, py) = (fix(c.0) + lo * step_x, fix(c.1) + lo * step_y);
         let last = self.count as i64 - 1;
-        let (ex, ey) = (px + last * step_x, py + last * step_y);
-        let limit_x = (width as i64 - 1) << FIX_BITS;
-        let limit_y = (height as i64 - 1) << FIX_BITS;
-        let clear = |p: i64, limit: i64| (0..limit).contains(&p);
-        if !(clear(px, limit_x) && clear(ex, limit_x) && clear(py, limit_y) && clear(ey, limit_y)) {
-            return None;
+        let limit_x = (width - 1) << FIX_BITS;
+        let limit_y = (height - 1) << FIX_BITS;
+        let clear = |p: i64, limit: i64| (p >= 0) & (p < limit);
+        for v in [
+            &mut self.base,
+            &mut self.x,
+            &mut self.y,
+            &mut self.sx,
+            &mut self.sy,
+        ] {
+            v.resize(n, 0);
         }
-        // Positions relative to the first sample's cell: the fraction bits are those of the
-        // absolute position (the cell is a multiple of 2²⁴), the cell is the first one plus the
-        // integer part.
-        let base = (py >> FIX_BITS) as usize * width + (px >> FIX_BITS) as usize;
-        self.base.push(base as i32);
-        self.x.push((px & FRAC as i64) as i32);
-        self.y.push((py & FRAC as i64) as i32);
-        self.sx.push(step_x as i32);
-        self.sy.push(step_y as i32);
-        self.lines += 1;
-        Some(self.lines - 1)
+        self.valid.resize(n, false);
+        let (base, x, y) = (&mut self.base[..n], &mut self.x[..n], &mut self.y[..n]);
+        let (sx, sy, valid) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.valid[..n]);
+        let (lines, inside) = (&lines[..n], &inside[..n]);
+        for l in 0..n {
+            let (c, d) = lines[l];
+            let (step_x, step_y) = (fix(d.x), fix(d.y));
+            // Wrapping: a huge step gives garbage here, which the step test then rejects.
+            let px = fix(c.x).wrapping_add(lo.wrapping_mul(step_x));
+            let py = fix(c.y).wrapping_add(lo.wrapping_mul(step_y));
+            let ex = px.wrapping_add(last.wrapping_mul(step_x));
+            let ey = py.wrapping_add(last.wrapping_mul(step_y));
+            let ok = inside[l]
+                & small
+                & (step_x.unsigned_abs() <= step_max)
+                & (step_y.unsigned_abs() <= step_max)
+                & clear(px, limit_x)
+                & clear(ex, limit_x)
+                & clear(py, limit_y)
+                & clear(ey, limit_y);
+            let pick = |v: i64| if ok { v } else { 0 };
+            let (px, py) = (pick(px), pick(py));
+            // Positions relative to the first sample's cell: the fraction bits are those of
+            // the absolute position (the cell is a multiple of 2²⁴), the cell is the first one
+            // plus the integer part.
+            base[l] = ((py >> FIX_BITS) * width + (px >> FIX_BITS)) as i32;
+            x[l] = (px & FRAC as i64) as i32;
+            y[l] = (py & FRAC as i64) as i32;
+            sx[l] = pick(step_x) as i32;
+            sy[l] = pick(step_y) as i32;
+            valid[l] = ok;
+        }
+        self.lines = n;
+    }
+
+    /// Whether lane `line` of the last [`Self::place`] is scanned.
+    #[inline]
+    pub(crate) fn scanned(&self, line: usize) -> bool {
+        self.valid.get(line).copied().unwrap_or(false)
     }
 
     /// Samples, interpolates, filters and suppresses all lines added, leaving one edge mask per
