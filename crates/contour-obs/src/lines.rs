@@ -220,6 +220,14 @@ impl MeasurementLines {
         &self.settings
     }
 
+    /// The same workspace with the line scan run under `arch` instead of the best instruction
+    /// set of the processor (tests).
+    #[cfg(test)]
+    fn with_arch(mut self, arch: pulp::Arch) -> Self {
+        self.arch = arch;
+        self
+    }
+
     /// Forgets all lines (keeps the buffers).
     pub fn clear(&mut self) {
         self.centres.clear();
@@ -845,6 +853,87 @@ mod tests {
             fast_lines > 5_000 && edges > 20_000,
             "{fast_lines} fast lines, {edges} edges"
         );
+    }
+
+    /// Every instruction set the scan can run under on this processor: baseline x86-64, AVX2
+    /// and AVX-512 where available.
+    fn instruction_sets() -> Vec<pulp::Arch> {
+        let mut sets = vec![pulp::Arch::Scalar];
+        if let Some(v3) = pulp::x86::V3::try_new() {
+            sets.push(pulp::Arch::V3(v3));
+        }
+        if let Some(v4) = pulp::x86::V4::try_new() {
+            sets.push(pulp::Arch::V4(v4));
+        }
+        sets
+    }
+
+    #[test]
+    fn every_instruction_set_gives_the_same_bits() {
+        // The scan compiled for each instruction set (pulp's run-time dispatch) against the
+        // baseline one on the same lines: the same edges, observed lengths, nearest edges and
+        // counts to the bit (no fused multiply-add: Rust never contracts).
+        let mut rng = Pcg64Mcg::seed_from_u64(22);
+        let (w, h) = (150, 110);
+        let data = cluttered(&mut rng, w, h);
+        let image = GreyView::new(w, h, &data).unwrap();
+        let sets = instruction_sets();
+        let mut lines = 0usize;
+        for settings in settings_under_test() {
+            let settings = LineSettings {
+                n_lines: 24,
+                ..settings
+            };
+            let contour = Contour::new(&Template::UnitCircle, settings.n_lines).unwrap();
+            let mut workspaces: Vec<MeasurementLines> = sets
+                .iter()
+                .map(|&arch| MeasurementLines::new(&settings).unwrap().with_arch(arch))
+                .collect();
+            let half = settings.half_length() as i64;
+            for _ in 0..60 {
+                let pose = Affine2::from_ellipse(
+                    rng.random_range(-10.0..160.0),
+                    rng.random_range(-10.0..120.0),
+                    rng.random_range(5.0..45.0),
+                    rng.random_range(5.0..45.0),
+                    rng.random_range(-3.2..3.2),
+                );
+                let (base, others) = workspaces.split_first_mut().unwrap();
+                base.extract(&image, &contour, &pose).unwrap();
+                for ws in others.iter_mut() {
+                    ws.extract(&image, &contour, &pose).unwrap();
+                    for i in 0..contour.len() {
+                        assert_eq!(ws.edges(i), base.edges(i), "line {i}");
+                        assert_eq!(ws.observed_length(i), base.observed_length(i));
+                    }
+                }
+                for search in [2, half] {
+                    let mut want = Vec::new();
+                    base.scan_lines(&image, &contour, &pose, -search, search);
+                    for i in 0..contour.len() {
+                        want.push(base.nearest_planned(&image, i, search).to_bits());
+                    }
+                    for ws in others.iter_mut() {
+                        ws.scan_lines(&image, &contour, &pose, -search, search);
+                        for (i, want) in want.iter().enumerate() {
+                            assert_eq!(ws.nearest_planned(&image, i, search).to_bits(), *want);
+                        }
+                    }
+                }
+                base.scan_lines(&image, &contour, &pose, -half, half);
+                for ws in others.iter_mut() {
+                    ws.scan_lines(&image, &contour, &pose, -half, half);
+                    for i in 0..contour.len() {
+                        let want = base.count_edges(&image, i, 4.0);
+                        assert_eq!(ws.count_edges(&image, i, 4.0), want);
+                        assert_eq!(ws.candidates(), base.candidates());
+                        lines += usize::from(base.plan[i].fast.is_some());
+                    }
+                }
+            }
+        }
+        // Many lines through the fast scan under every other instruction set.
+        assert!(lines > 1_000 * (sets.len() - 1), "{lines} fast lines");
     }
 
     #[test]

@@ -263,6 +263,10 @@ impl LineScan {
     }
 }
 
+/// Per line: its first cell, its position (x, y) relative to it (stepped in place) and its
+/// step (sx, sy), as [`LineScan`] keeps them.
+type Starts<'a> = (&'a [i32], &'a mut [i32], &'a mut [i32], &'a [i32], &'a [i32]);
+
 /// The cell indices (row · width + column) and the fractions of the fixed-point positions of
 /// every line's samples: entry k·n + l is line l's position (x, y) + k·(sx, sy) relative to its
 /// first cell `base`. One vector pass over the lines per sample; `x` and `y` are stepped in
@@ -273,7 +277,7 @@ fn cells(
     fx: &mut [f32],
     fy: &mut [f32],
     width: i32,
-    (base, x, y, sx, sy): (&[i32], &mut [i32], &mut [i32], &[i32], &[i32]),
+    (base, x, y, sx, sy): Starts<'_>,
     scale: f32,
 ) {
     let n = base.len();
