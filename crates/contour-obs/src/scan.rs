@@ -265,7 +265,13 @@ impl LineScan {
 
 /// Per line: its first cell, its position (x, y) relative to it (stepped in place) and its
 /// step (sx, sy), as [`LineScan`] keeps them.
-type Starts<'a> = (&'a [i32], &'a mut [i32], &'a mut [i32], &'a [i32], &'a [i32]);
+type Starts<'a> = (
+    &'a [i32],
+    &'a mut [i32],
+    &'a mut [i32],
+    &'a [i32],
+    &'a [i32],
+);
 
 /// The cell indices (row · width + column) and the fractions of the fixed-point positions of
 /// every line's samples: entry k·n + l is line l's position (x, y) + k·(sx, sy) relative to its
