@@ -109,6 +109,8 @@ pub struct MeasurementLines {
     /// Whether a line examined over all its L + 1 offsets is observed (always, unless the
     /// observed fraction exceeds 1, which validation rejects): `enough(L + 1)`, once.
     whole_observed: bool,
+    /// The observed length of a line examined over all its L + 1 offsets, `length_of(L + 1)`.
+    whole_length: f64,
     /// The posed contour points and normals ((NaN, NaN): undefined), [`Contour::pose_all`].
     posed: Vec<(Vector2<f64>, Vector2<f64>)>,
     /// The best instruction set of this processor (run-time detection), under which the line
@@ -195,8 +197,12 @@ impl MeasurementLines {
         starts.push(0);
         let needed = settings.min_observed_fraction * settings.length.saturating_add(1) as f64;
         let whole_observed = (settings.length + 1) as f64 >= needed;
+        let full = settings.length as f64;
+        let whole_length =
+            full * (settings.length + 1) as f64 / (2 * settings.half_length() + 1) as f64;
         Ok(Self {
             whole_observed,
+            whole_length,
             inside: Vec::with_capacity(n),
             settings: *settings,
             detector,
@@ -450,12 +456,49 @@ impl MeasurementLines {
     /// edge within `near` px of the contour point (on the fast path only those at integer
     /// offsets |k| ≤ ⌊`near` + ½⌋, which are all that can lie within `near`; on the general
     /// path all). Wu's likelihoods need no more.
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn count_edges(
         &mut self,
         image: &GreyView<'_>,
         i: usize,
         near: f64,
+    ) -> (f64, usize) {
+        let window = self.window_bits(near);
+        self.count_edges_in(image, i, window)
+    }
+
+    /// The candidate bits of a fast line ([`LineScan::mask`], bit j ↔ offset j − L/2) at
+    /// integer offsets |k| ≤ ⌊`near` + ½⌋, for [`Self::count_edges_in`].
+    pub(crate) fn window_bits(&self, near: f64) -> u64 {
+        let half = self.settings.half_length() as i64;
+        // |k| ≤ kn ↔ j ∈ [half − kn, half + kn]. ⌊near + ½⌋ by truncation (a libm call
+        // otherwise on baseline x86-64).
+        let kn = if near + 0.5 >= 0.0 {
+            ((near + 0.5) as i64).min(half)
+        } else {
+            -1
+        };
+        if kn < 0 {
+            0
+        } else {
+            let width = 2 * kn + 1;
+            let ones = if width >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << width) - 1
+            };
+            ones << (half - kn)
+        }
+    }
+
+    /// [`Self::count_edges`] with the window as [`Self::window_bits`] of `near`, computed once
+    /// per hypothesis.
+    #[inline]
+    pub(crate) fn count_edges_in(
+        &mut self,
+        image: &GreyView<'_>,
+        i: usize,
+        window: u64,
     ) -> (f64, usize) {
         self.edges.clear();
         let Some(&planned) = self.plan.get(i) else {
@@ -465,39 +508,21 @@ impl MeasurementLines {
             let examined = self.append_general(image, planned.centre, planned.normal);
             return (self.length_of(examined), self.edges.len());
         };
-        let examined = self.settings.length + 1;
         if !self.whole_observed {
             return (self.length_of(0), 0);
         }
-        let half = self.settings.half_length() as i64;
         let mask = self.scan.mask(line);
-        // Bits j ↔ offsets j − half; |k| ≤ kn ↔ j ∈ [half − kn, half + kn].
-        // ⌊near + ½⌋ by truncation (a libm call otherwise on baseline x86-64).
-        let kn = if near + 0.5 >= 0.0 {
-            ((near + 0.5) as i64).min(half)
-        } else {
-            -1
-        };
-        let mut near_mask = if kn < 0 {
-            0
-        } else {
-            let width = 2 * kn + 1;
-            let ones = if width >= 64 {
-                u64::MAX
-            } else {
-                (1u64 << width) - 1
-            };
-            (ones << (half - kn)) & mask
-        };
+        let mut near_mask = window & mask;
         while near_mask != 0 {
             self.edges
                 .push(self.scan.offset(line, near_mask.trailing_zeros()));
             near_mask &= near_mask - 1;
         }
-        (self.length_of(examined), mask.count_ones() as usize)
+        // All L + 1 offsets examined.
+        (self.whole_length, mask.count_ones() as usize)
     }
 
-    /// The edge offsets left by [`Self::count_edges`].
+    /// The edge offsets left by [`Self::count_edges_in`].
     #[inline]
     pub(crate) fn candidates(&self) -> &[f64] {
         &self.edges
