@@ -104,8 +104,6 @@ pub struct MeasurementLines {
     /// in it after [`Self::scan_lines`].
     scan: LineScan,
     plan: Vec<Planned>,
-    /// [`LineBounds::holds`] of each posed line.
-    inside: Vec<bool>,
     /// Whether a line examined over all its L + 1 offsets is observed (always, unless the
     /// observed fraction exceeds 1, which validation rejects): `enough(L + 1)`, once.
     whole_observed: bool,
@@ -203,7 +201,6 @@ impl MeasurementLines {
         Ok(Self {
             whole_observed,
             whole_length,
-            inside: Vec::with_capacity(n),
             settings: *settings,
             detector,
             reach,
@@ -345,11 +342,9 @@ impl MeasurementLines {
         // The end-point test and the fixed-point set-up of every line in branch-free passes,
         // then the lines.
         let bounds = self.bounds(image);
-        self.inside.clear();
-        self.inside
-            .extend(self.posed.iter().map(|&(c, n)| bounds.holds(c, n)));
         if fits {
-            self.scan.place(image, &self.posed, &self.inside);
+            self.scan
+                .place(image, &self.posed, |c, n| bounds.holds(c, n));
         }
         for (i, &(centre, normal)) in self.posed.iter().enumerate() {
             self.plan.push(Planned {
@@ -374,8 +369,9 @@ impl MeasurementLines {
         if !self.scan.begin(&self.detector, klo, khi, 1) {
             return None;
         }
-        let inside = self.bounds(image).holds(centre, n);
-        self.scan.place(image, &[(centre, n)], &[inside]);
+        let bounds = self.bounds(image);
+        self.scan
+            .place(image, &[(centre, n)], |c, n| bounds.holds(c, n));
         if !self.scan.scanned(0) {
             return None;
         }

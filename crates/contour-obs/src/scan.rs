@@ -118,7 +118,8 @@ impl LineScan {
 
     /// Places line l = c + k·n for every (c, n) of `lines` (n = (NaN, NaN): undefined) at lane
     /// l of the scan, in one branch-free pass. A line is scanned ([`Self::scanned`]) when
-    /// `inside[l]` (its end points lie in the image, [`crate::lines`]'s test) and its samples
+    /// `inside(c, n)` (its end points lie in the image, [`crate::lines`]'s test, branch-free)
+    /// and its samples
     /// all lie in [0, w − 1) × [0, h − 1), that is both end points do in fixed point, positions
     /// being linear in k; the other lanes read the first cell and nothing reads their masks.
     /// Positions are stepped in fixed point exactly as [`GreyView::sample_line`]'s unclamped
@@ -129,9 +130,9 @@ impl LineScan {
         &mut self,
         image: &GreyView<'_>,
         lines: &[(Vector2<f64>, Vector2<f64>)],
-        inside: &[bool],
+        inside: impl Fn(Vector2<f64>, Vector2<f64>) -> bool,
     ) {
-        let n = lines.len().min(inside.len());
+        let n = lines.len();
         if n * self.count > self.s.len() {
             return;
         }
@@ -159,7 +160,7 @@ impl LineScan {
         self.valid.resize(n, false);
         let (base, x, y) = (&mut self.base[..n], &mut self.x[..n], &mut self.y[..n]);
         let (sx, sy, valid) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.valid[..n]);
-        let (lines, inside) = (&lines[..n], &inside[..n]);
+        let lines = &lines[..n];
         for l in 0..n {
             let (c, d) = lines[l];
             let (step_x, step_y) = (fix(d.x), fix(d.y));
@@ -168,7 +169,7 @@ impl LineScan {
             let py = fix(c.y).wrapping_add(lo.wrapping_mul(step_y));
             let ex = px.wrapping_add(last.wrapping_mul(step_x));
             let ey = py.wrapping_add(last.wrapping_mul(step_y));
-            let ok = inside[l]
+            let ok = inside(c, d)
                 & small
                 & (step_x.unsigned_abs() <= step_max)
                 & (step_y.unsigned_abs() <= step_max)
