@@ -26,6 +26,10 @@ use crate::{EdgeDetector, GreyView, Polarity};
 /// default lines (29 samples) and any line up to L = 56 px at σ = 1 px.
 const SCAN_CAP: usize = 64;
 
+/// Lines are placed in groups of this many lanes (8 f32 fill an AVX2 vector, half an AVX-512
+/// one).
+const LANES: usize = 8;
+
 /// The largest filter radius a scan takes (⌈3σ⌉ ≤ 30 for σ ≤ 10 px).
 const MAX_RADIUS: usize = 30;
 
@@ -103,7 +107,7 @@ impl LineScan {
             return false;
         }
         (self.klo, self.candidates, self.count, self.radius) = (klo, candidates, count, r);
-        let len = max_lines * count;
+        let len = max_lines.next_multiple_of(LANES) * count;
         if self.s.len() < len {
             for v in [&mut self.fx, &mut self.fy, &mut self.s, &mut self.d] {
                 v.resize(len, 0.0);
@@ -133,7 +137,10 @@ impl LineScan {
         inside: impl Fn(Vector2<f64>, Vector2<f64>) -> bool,
     ) {
         let n = lines.len();
-        if n * self.count > self.s.len() {
+        // Lanes padded to whole groups of LANES, so that the passes run on whole vectors; the
+        // padding lanes read the first cell and are never scanned.
+        let lanes = n.next_multiple_of(LANES);
+        if lanes * self.count > self.s.len() {
             return;
         }
         let (width, height) = (image.width() as i64, image.height() as i64);
@@ -155,9 +162,11 @@ impl LineScan {
             &mut self.sx,
             &mut self.sy,
         ] {
-            v.resize(n, 0);
+            v.clear();
+            v.resize(lanes, 0);
         }
-        self.valid.resize(n, false);
+        self.valid.clear();
+        self.valid.resize(lanes, false);
         let (base, x, y) = (&mut self.base[..n], &mut self.x[..n], &mut self.y[..n]);
         let (sx, sy, valid) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.valid[..n]);
         let lines = &lines[..n];
@@ -189,7 +198,7 @@ impl LineScan {
             sy[l] = pick(step_y) as i32;
             valid[l] = ok;
         }
-        self.lines = n;
+        self.lines = lanes;
     }
 
     /// Whether lane `line` of the last [`Self::place`] is scanned.
@@ -213,7 +222,7 @@ impl LineScan {
             &mut self.fx[..samples],
             &mut self.fy[..samples],
             image.width() as i32,
-            (&self.base, &mut self.x, &mut self.y, &self.sx, &self.sy),
+            (&self.base, &self.x, &self.y, &self.sx, &self.sy),
             1.0 / (1i64 << FIX_BITS) as f32,
         );
         gather(
@@ -264,20 +273,13 @@ impl LineScan {
     }
 }
 
-/// Per line: its first cell, its position (x, y) relative to it (stepped in place) and its
-/// step (sx, sy), as [`LineScan`] keeps them.
-type Starts<'a> = (
-    &'a [i32],
-    &'a mut [i32],
-    &'a mut [i32],
-    &'a [i32],
-    &'a [i32],
-);
+/// Per line: its first cell, its position (x, y) relative to it and its step (sx, sy), as
+/// [`LineScan`] keeps them.
+type Starts<'a> = (&'a [i32], &'a [i32], &'a [i32], &'a [i32], &'a [i32]);
 
 /// The cell indices (row · width + column) and the fractions of the fixed-point positions of
 /// every line's samples: entry k·n + l is line l's position (x, y) + k·(sx, sy) relative to its
-/// first cell `base`. One vector pass over the lines per sample; `x` and `y` are stepped in
-/// place.
+/// first cell `base`. One vector pass over the lines per sample.
 #[inline(always)]
 fn cells(
     cell: &mut [i32],
@@ -288,19 +290,22 @@ fn cells(
     scale: f32,
 ) {
     let n = base.len();
-    let (x, y, sx, sy) = (&mut x[..n], &mut y[..n], &sx[..n], &sy[..n]);
+    let (x, y, sx, sy) = (&x[..n], &y[..n], &sx[..n], &sy[..n]);
     let rows = cell
         .chunks_exact_mut(n)
         .zip(fx.chunks_exact_mut(n))
         .zip(fy.chunks_exact_mut(n));
-    for ((cell, fx), fy) in rows {
+    for (k, ((cell, fx), fy)) in rows.enumerate() {
         let (cell, fx, fy) = (&mut cell[..n], &mut fx[..n], &mut fy[..n]);
+        // (x, y) + k·(sx, sy), the same integers as stepping k times (no overflow: every
+        // relative position fits an i32), without reading back positions stored by the
+        // previous sample (a store-forwarding stall with wide vectors).
+        let k = k as i32;
         for l in 0..n {
-            cell[l] = base[l] + (y[l] >> FIX_BITS) * width + (x[l] >> FIX_BITS);
-            fx[l] = (x[l] & FRAC) as f32 * scale;
-            fy[l] = (y[l] & FRAC) as f32 * scale;
-            x[l] += sx[l];
-            y[l] += sy[l];
+            let (xk, yk) = (x[l] + k * sx[l], y[l] + k * sy[l]);
+            cell[l] = base[l] + (yk >> FIX_BITS) * width + (xk >> FIX_BITS);
+            fx[l] = (xk & FRAC) as f32 * scale;
+            fy[l] = (yk & FRAC) as f32 * scale;
         }
     }
 }
