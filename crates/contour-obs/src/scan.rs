@@ -246,11 +246,20 @@ impl LineScan {
         flags(det, n, &self.d[..responses], &mut self.flag[..flagged]);
         self.masks.clear();
         self.masks.resize(n, 0);
-        let masks = &mut self.masks[..n];
-        for (j, row) in self.flag[..flagged].chunks_exact(n).enumerate() {
-            for (m, &f) in masks.iter_mut().zip(row) {
-                *m |= u64::from(f) << j;
+        // A group of lanes at a time, its masks kept in registers over the candidates (no
+        // read-modify-write of stored masks from one candidate to the next).
+        let flag = &self.flag[..flagged];
+        for (g, masks) in self.masks.chunks_exact_mut(LANES).enumerate() {
+            let mut acc = [0u64; LANES];
+            for (j, row) in flag.chunks_exact(n).enumerate() {
+                let Some(f) = row.get(g * LANES..).and_then(|f| f.first_chunk::<LANES>()) else {
+                    break;
+                };
+                for t in 0..LANES {
+                    acc[t] |= u64::from(f[t]) << j;
+                }
             }
+            masks.copy_from_slice(&acc);
         }
     }
 
