@@ -145,7 +145,7 @@ impl LineScan {
         }
         let (width, height) = (image.width() as i64, image.height() as i64);
         let one = (1i64 << FIX_BITS) as f64;
-        let fix = |v: f64| (v * one) as i64;
+        let fix = |v: f64| trunc_i64(v * one);
         // |n| ≤ 2 keeps every relative position below 2⁶·2²⁵ = 2³¹, and an image below 2³¹
         // pixels every cell index.
         let step_max = 2u64 << FIX_BITS;
@@ -282,6 +282,25 @@ impl LineScan {
     }
 }
 
+/// `v as i64` for |v| < 2⁵⁰ (fixed-point positions of lines inside any image), in float and
+/// integer arithmetic that vectorises (the saturating conversion `as` does not). Other values
+/// give an unspecified integer, without panicking.
+#[inline(always)]
+fn trunc_i64(v: f64) -> i64 {
+    // Adding 1.5·2⁵² rounds to an integer (to nearest) and puts it in the low mantissa bits.
+    const MAGIC: f64 = 6_755_399_441_055_744.0;
+    let r = (v + MAGIC) - MAGIC;
+    // Towards zero: one step back where rounding went away from zero (exact for |v| < 2⁵⁰).
+    let r = if v >= 0.0 && r > v {
+        r - 1.0
+    } else if v < 0.0 && r < v {
+        r + 1.0
+    } else {
+        r
+    };
+    ((r + MAGIC).to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64)
+}
+
 /// Per line: its first cell, its position (x, y) relative to it and its step (sx, sy), as
 /// [`LineScan`] keeps them.
 type Starts<'a> = (&'a [i32], &'a [i32], &'a [i32], &'a [i32], &'a [i32]);
@@ -413,5 +432,28 @@ fn flags_with(n: usize, d: &[f32], flag: &mut [u8], threshold: f32, keep: impl F
         // The asymmetric comparison keeps one sample of a plateau.
         let edge = keep(d0[j]) & (a0 >= threshold) & (a0 >= am) & (a0 > ap);
         flag[j] = u8::from(edge);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trunc_i64_is_the_conversion_in_range() {
+        let mut values = vec![0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5, 2.5, -2.5];
+        let big = (1u64 << 50) as f64;
+        values.extend([big - 1.0, -(big - 1.0), big - 0.5, -(big - 0.5)]);
+        let mut x = 0.123_456_789f64;
+        for _ in 0..10_000 {
+            // Pseudo-random magnitudes over the whole range, fractions of every kind.
+            x = (x * 9_301.0 + 49_297.0) % 233_280.0;
+            let v = (x / 233_280.0 - 0.5) * 2f64.powi((x as i32) % 51);
+            values.push(v);
+            values.push(v * 16_777_216.0 % big);
+        }
+        for v in values {
+            assert_eq!(trunc_i64(v), v as i64, "{v}");
+        }
     }
 }
