@@ -326,7 +326,7 @@ impl MeasurementLines {
         });
     }
 
-    /// [`Self::scan_lines`], inlined into the dispatched (feature-enabled) closure.
+    /// [`Self::scan_lines`], inlined into the dispatched (feature-enabled) operation.
     #[inline(always)]
     fn scan_lines_with(
         &mut self,
