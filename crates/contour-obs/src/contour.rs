@@ -171,6 +171,7 @@ impl Contour {
     /// outward unit normal, with (NaN, NaN) for an undefined normal. The same arithmetic as
     /// `pose_point`, bit for bit, written as one branch-free loop so that the square roots
     /// and divisions of consecutive points overlap.
+    #[inline(always)]
     pub(crate) fn pose_all(&self, pose: &Affine2, out: &mut Vec<(Vector2<f64>, Vector2<f64>)>) {
         let a = &pose.a;
         let det = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(1, 0)];

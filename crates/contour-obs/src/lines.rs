@@ -104,13 +104,16 @@ pub struct MeasurementLines {
     /// in it after [`Self::scan_lines`].
     scan: LineScan,
     plan: Vec<Planned>,
-    /// [`LineBounds::holds`] of each posed line.
-    inside: Vec<bool>,
     /// Whether a line examined over all its L + 1 offsets is observed (always, unless the
     /// observed fraction exceeds 1, which validation rejects): `enough(L + 1)`, once.
     whole_observed: bool,
+    /// The observed length of a line examined over all its L + 1 offsets, `length_of(L + 1)`.
+    whole_length: f64,
     /// The posed contour points and normals ((NaN, NaN): undefined), [`Contour::pose_all`].
     posed: Vec<(Vector2<f64>, Vector2<f64>)>,
+    /// The best instruction set of this processor (run-time detection), under which the line
+    /// scan is compiled.
+    arch: pulp::Arch,
 }
 
 /// Whether a line lies wholly inside the image: both end points c ± reach·n in
@@ -141,6 +144,34 @@ impl LineBounds {
     }
 }
 
+/// [`MeasurementLines::scan_lines`] as an operation that [`pulp::Arch::dispatch`] compiles once
+/// per instruction set and runs under the best one of the processor.
+struct ScanLines<'a, 'b> {
+    lines: &'a mut MeasurementLines,
+    image: &'a GreyView<'b>,
+    contour: &'a Contour,
+    pose: &'a Affine2,
+    klo: i64,
+    khi: i64,
+}
+
+impl pulp::WithSimd for ScanLines<'_, '_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let Self {
+            lines,
+            image,
+            contour,
+            pose,
+            klo,
+            khi,
+        } = self;
+        lines.scan_lines_with(image, contour, pose, klo, khi);
+    }
+}
+
 /// One line of [`MeasurementLines::scan_lines`]: where it is, and its index in the fast scan
 /// (`None`: the general path takes it).
 #[derive(Debug, Clone, Copy)]
@@ -164,9 +195,12 @@ impl MeasurementLines {
         starts.push(0);
         let needed = settings.min_observed_fraction * settings.length.saturating_add(1) as f64;
         let whole_observed = (settings.length + 1) as f64 >= needed;
+        let full = settings.length as f64;
+        let whole_length =
+            full * (settings.length + 1) as f64 / (2 * settings.half_length() + 1) as f64;
         Ok(Self {
             whole_observed,
-            inside: Vec::with_capacity(n),
+            whole_length,
             settings: *settings,
             detector,
             reach,
@@ -180,12 +214,21 @@ impl MeasurementLines {
             scan: LineScan::default(),
             plan: Vec::with_capacity(n),
             posed: Vec::with_capacity(n),
+            arch: pulp::Arch::new(),
         })
     }
 
     /// The settings.
     pub fn settings(&self) -> &LineSettings {
         &self.settings
+    }
+
+    /// The same workspace with the line scan run under `arch` instead of the best instruction
+    /// set of the processor (tests).
+    #[cfg(test)]
+    fn with_arch(mut self, arch: pulp::Arch) -> Self {
+        self.arch = arch;
+        self
     }
 
     /// Forgets all lines (keeps the buffers).
@@ -272,30 +315,45 @@ impl MeasurementLines {
         klo: i64,
         khi: i64,
     ) {
+        let arch = self.arch;
+        arch.dispatch(ScanLines {
+            lines: self,
+            image,
+            contour,
+            pose,
+            klo,
+            khi,
+        });
+    }
+
+    /// [`Self::scan_lines`], inlined into the dispatched (feature-enabled) operation.
+    #[inline(always)]
+    fn scan_lines_with(
+        &mut self,
+        image: &GreyView<'_>,
+        contour: &Contour,
+        pose: &Affine2,
+        klo: i64,
+        khi: i64,
+    ) {
         self.plan.clear();
         let fits = self.scan.begin(&self.detector, klo, khi, contour.len());
         contour.pose_all(pose, &mut self.posed);
-        // The end-point test of every line in one branch-free pass, then the lines.
+        // The end-point test and the fixed-point set-up of every line in branch-free passes,
+        // then the lines.
         let bounds = self.bounds(image);
-        self.inside.clear();
-        self.inside
-            .extend(self.posed.iter().map(|&(c, n)| bounds.holds(c, n)));
-        for i in 0..contour.len() {
-            let (centre, normal) = self.posed[i];
-            let normal = (!normal.x.is_nan()).then_some(normal);
-            let fast = match normal {
-                Some(n) if fits && self.inside[i] => {
-                    self.scan.push(image, (centre.x, centre.y), (n.x, n.y))
-                }
-                _ => None,
-            };
+        if fits {
+            self.scan
+                .place(image, &self.posed, |c, n| bounds.holds(c, n));
+        }
+        for (i, &(centre, normal)) in self.posed.iter().enumerate() {
             self.plan.push(Planned {
                 centre,
-                normal,
-                fast,
+                normal: (!normal.x.is_nan()).then_some(normal),
+                fast: self.scan.scanned(i).then_some(i),
             });
         }
-        self.scan.finish(&self.detector);
+        self.scan.finish(image, &self.detector);
     }
 
     /// One line through the fast scan alone: its index there, or `None` for the general path.
@@ -307,28 +365,18 @@ impl MeasurementLines {
         klo: i64,
         khi: i64,
     ) -> Option<usize> {
+        let n = normal?;
         if !self.scan.begin(&self.detector, klo, khi, 1) {
             return None;
         }
-        let line = self.plan_fast(image, centre, normal)?;
-        self.scan.finish(&self.detector);
-        Some(line)
-    }
-
-    /// Adds the line to the fast scan when it lies wholly inside the image ([`LineBounds`]);
-    /// [`LineScan::push`] then checks the fixed-point positions.
-    #[inline]
-    fn plan_fast(
-        &mut self,
-        image: &GreyView<'_>,
-        c: Vector2<f64>,
-        normal: Option<Vector2<f64>>,
-    ) -> Option<usize> {
-        let n = normal?;
-        if !self.bounds(image).holds(c, n) {
+        let bounds = self.bounds(image);
+        self.scan
+            .place(image, &[(centre, n)], |c, n| bounds.holds(c, n));
+        if !self.scan.scanned(0) {
             return None;
         }
-        self.scan.push(image, (c.x, c.y), (n.x, n.y))
+        self.scan.finish(image, &self.detector);
+        Some(0)
     }
 
     /// The end-point test of lines on `image`.
@@ -404,12 +452,49 @@ impl MeasurementLines {
     /// edge within `near` px of the contour point (on the fast path only those at integer
     /// offsets |k| ≤ ⌊`near` + ½⌋, which are all that can lie within `near`; on the general
     /// path all). Wu's likelihoods need no more.
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn count_edges(
         &mut self,
         image: &GreyView<'_>,
         i: usize,
         near: f64,
+    ) -> (f64, usize) {
+        let window = self.window_bits(near);
+        self.count_edges_in(image, i, window)
+    }
+
+    /// The candidate bits of a fast line ([`LineScan::mask`], bit j ↔ offset j − L/2) at
+    /// integer offsets |k| ≤ ⌊`near` + ½⌋, for [`Self::count_edges_in`].
+    pub(crate) fn window_bits(&self, near: f64) -> u64 {
+        let half = self.settings.half_length() as i64;
+        // |k| ≤ kn ↔ j ∈ [half − kn, half + kn]. ⌊near + ½⌋ by truncation (a libm call
+        // otherwise on baseline x86-64).
+        let kn = if near + 0.5 >= 0.0 {
+            ((near + 0.5) as i64).min(half)
+        } else {
+            -1
+        };
+        if kn < 0 {
+            0
+        } else {
+            let width = 2 * kn + 1;
+            let ones = if width >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << width) - 1
+            };
+            ones << (half - kn)
+        }
+    }
+
+    /// [`Self::count_edges`] with the window as [`Self::window_bits`] of `near`, computed once
+    /// per hypothesis.
+    #[inline]
+    pub(crate) fn count_edges_in(
+        &mut self,
+        image: &GreyView<'_>,
+        i: usize,
+        window: u64,
     ) -> (f64, usize) {
         self.edges.clear();
         let Some(&planned) = self.plan.get(i) else {
@@ -419,39 +504,21 @@ impl MeasurementLines {
             let examined = self.append_general(image, planned.centre, planned.normal);
             return (self.length_of(examined), self.edges.len());
         };
-        let examined = self.settings.length + 1;
         if !self.whole_observed {
             return (self.length_of(0), 0);
         }
-        let half = self.settings.half_length() as i64;
         let mask = self.scan.mask(line);
-        // Bits j ↔ offsets j − half; |k| ≤ kn ↔ j ∈ [half − kn, half + kn].
-        // ⌊near + ½⌋ by truncation (a libm call otherwise on baseline x86-64).
-        let kn = if near + 0.5 >= 0.0 {
-            ((near + 0.5) as i64).min(half)
-        } else {
-            -1
-        };
-        let mut near_mask = if kn < 0 {
-            0
-        } else {
-            let width = 2 * kn + 1;
-            let ones = if width >= 64 {
-                u64::MAX
-            } else {
-                (1u64 << width) - 1
-            };
-            (ones << (half - kn)) & mask
-        };
+        let mut near_mask = window & mask;
         while near_mask != 0 {
             self.edges
                 .push(self.scan.offset(line, near_mask.trailing_zeros()));
             near_mask &= near_mask - 1;
         }
-        (self.length_of(examined), mask.count_ones() as usize)
+        // All L + 1 offsets examined.
+        (self.whole_length, mask.count_ones() as usize)
     }
 
-    /// The edge offsets left by [`Self::count_edges`].
+    /// The edge offsets left by [`Self::count_edges_in`].
     #[inline]
     pub(crate) fn candidates(&self) -> &[f64] {
         &self.edges
@@ -807,6 +874,87 @@ mod tests {
             fast_lines > 5_000 && edges > 20_000,
             "{fast_lines} fast lines, {edges} edges"
         );
+    }
+
+    /// Every instruction set the scan can run under on this processor: baseline x86-64, AVX2
+    /// and AVX-512 where available.
+    fn instruction_sets() -> Vec<pulp::Arch> {
+        let mut sets = vec![pulp::Arch::Scalar];
+        if let Some(v3) = pulp::x86::V3::try_new() {
+            sets.push(pulp::Arch::V3(v3));
+        }
+        if let Some(v4) = pulp::x86::V4::try_new() {
+            sets.push(pulp::Arch::V4(v4));
+        }
+        sets
+    }
+
+    #[test]
+    fn every_instruction_set_gives_the_same_bits() {
+        // The scan compiled for each instruction set (pulp's run-time dispatch) against the
+        // baseline one on the same lines: the same edges, observed lengths, nearest edges and
+        // counts to the bit (no fused multiply-add: Rust never contracts).
+        let mut rng = Pcg64Mcg::seed_from_u64(22);
+        let (w, h) = (150, 110);
+        let data = cluttered(&mut rng, w, h);
+        let image = GreyView::new(w, h, &data).unwrap();
+        let sets = instruction_sets();
+        let mut lines = 0usize;
+        for settings in settings_under_test() {
+            let settings = LineSettings {
+                n_lines: 24,
+                ..settings
+            };
+            let contour = Contour::new(&Template::UnitCircle, settings.n_lines).unwrap();
+            let mut workspaces: Vec<MeasurementLines> = sets
+                .iter()
+                .map(|&arch| MeasurementLines::new(&settings).unwrap().with_arch(arch))
+                .collect();
+            let half = settings.half_length() as i64;
+            for _ in 0..60 {
+                let pose = Affine2::from_ellipse(
+                    rng.random_range(-10.0..160.0),
+                    rng.random_range(-10.0..120.0),
+                    rng.random_range(5.0..45.0),
+                    rng.random_range(5.0..45.0),
+                    rng.random_range(-3.2..3.2),
+                );
+                let (base, others) = workspaces.split_first_mut().unwrap();
+                base.extract(&image, &contour, &pose).unwrap();
+                for ws in others.iter_mut() {
+                    ws.extract(&image, &contour, &pose).unwrap();
+                    for i in 0..contour.len() {
+                        assert_eq!(ws.edges(i), base.edges(i), "line {i}");
+                        assert_eq!(ws.observed_length(i), base.observed_length(i));
+                    }
+                }
+                for search in [2, half] {
+                    let mut want = Vec::new();
+                    base.scan_lines(&image, &contour, &pose, -search, search);
+                    for i in 0..contour.len() {
+                        want.push(base.nearest_planned(&image, i, search).to_bits());
+                    }
+                    for ws in others.iter_mut() {
+                        ws.scan_lines(&image, &contour, &pose, -search, search);
+                        for (i, want) in want.iter().enumerate() {
+                            assert_eq!(ws.nearest_planned(&image, i, search).to_bits(), *want);
+                        }
+                    }
+                }
+                base.scan_lines(&image, &contour, &pose, -half, half);
+                for ws in others.iter_mut() {
+                    ws.scan_lines(&image, &contour, &pose, -half, half);
+                    for i in 0..contour.len() {
+                        let want = base.count_edges(&image, i, 4.0);
+                        assert_eq!(ws.count_edges(&image, i, 4.0), want);
+                        assert_eq!(ws.candidates(), base.candidates());
+                        lines += usize::from(base.plan[i].fast.is_some());
+                    }
+                }
+            }
+        }
+        // Many lines through the fast scan under every other instruction set.
+        assert!(lines > 1_000 * (sets.len() - 1), "{lines} fast lines");
     }
 
     #[test]

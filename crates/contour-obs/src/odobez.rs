@@ -187,15 +187,25 @@ impl OdobezLikelihood {
     }
 }
 
-/// Hypotheses per rayon task in the parallel batches: enough work (≈ 16 × 15 lines) to amortise
-/// a task and its workspace.
+/// The most hypotheses per rayon task in the parallel batches.
 const PAR_CHUNK: usize = 16;
+
+/// Rayon tasks per thread that a parallel batch aims at: enough that a thread slowed down by
+/// other work leaves little for the others to wait on at the end.
+const PAR_TASKS_PER_THREAD: usize = 16;
+
+/// Hypotheses per rayon task for a batch of `n`: `n` spread over [`PAR_TASKS_PER_THREAD`] tasks
+/// per thread, between 2 (a task must outweigh its scheduling) and [`PAR_CHUNK`].
+fn par_chunk(n: usize) -> usize {
+    let tasks = rayon::current_num_threads().max(1) * PAR_TASKS_PER_THREAD;
+    n.div_ceil(tasks).clamp(2, PAR_CHUNK)
+}
 
 /// How [`run_batch`] evaluates its hypotheses.
 pub(crate) enum Batch<'a> {
     /// In order, on the caller's workspace, stopping at the first error.
     Sequential(&'a mut MeasurementLines),
-    /// On the rayon thread pool over chunks of [`PAR_CHUNK`] hypotheses, each chunk sequential
+    /// On the rayon thread pool over chunks of [`par_chunk`] hypotheses, each chunk sequential
     /// inside and with its own workspace for these line settings.
     Parallel(&'a LineSettings),
 }
@@ -238,15 +248,16 @@ where
         Batch::Parallel(lines) => {
             // One workspace per rayon job (a few per thread, not one per chunk): its scan
             // buffers are allocated on first use.
+            let size = par_chunk(n);
             let results: Vec<Result<()>> = out
-                .par_chunks_mut(PAR_CHUNK)
+                .par_chunks_mut(size)
                 .enumerate()
                 .map_init(
                     || MeasurementLines::new(lines),
                     |ws, (chunk, o)| {
                         let ws = ws.as_mut().map_err(|e| e.clone())?;
                         for (j, v) in o.iter_mut().enumerate() {
-                            *v = one(ws, chunk * PAR_CHUNK + j)?;
+                            *v = one(ws, chunk * size + j)?;
                         }
                         Ok(())
                     },

@@ -7,32 +7,31 @@
 //! order), so every edge is the same to the bit; lines that touch the border take the general
 //! path.
 //!
-//! The speed comes from the layout. The lines of a scan are stored one after the other (structure
-//! of arrays, one entry per sample). The pixel reads are the only scalar pass, done line by line as the lines are
-//! added; interpolation, filter, |d| and suppression then run as single passes over all lines
-//! at once (each entry depends only on entries of its own line), which the compiler vectorises.
-//! Running each pass over all lines, rather than all passes over each line, also means a pass
-//! never reads values that the previous pass stored moments before in a different width (scalar
-//! stores read back as vectors), which would stall the processor's store forwarding.
+//! The speed comes from the layout. The lines of a scan are interleaved, sample-major: entry
+//! k·n + l holds sample k of line l (n lines), so that every pass is one loop over all lines
+//! and samples at once, each entry depending only on entries a multiple of n away (its own
+//! line), which the compiler vectorises with whole vectors and no per-line set-up: positions,
+//! then the pixel reads (the only scalar pass), interpolation, filter, suppression, and the
+//! masks (one bit per sample and line, set across lines). Running each pass over all lines,
+//! rather than all passes over each line, also means a pass never reads values that the
+//! previous pass stored moments before in a different width (scalar stores read back as
+//! vectors), which would stall the processor's store forwarding.
 
 use crate::image::FIX_BITS;
+use nalgebra::Vector2;
+
 use crate::{EdgeDetector, GreyView, Polarity};
 
 /// The most samples per line a scan takes; longer lines take the general path. 64 covers the
 /// default lines (29 samples) and any line up to L = 56 px at σ = 1 px.
 const SCAN_CAP: usize = 64;
 
+/// Lines are placed in groups of this many lanes (8 f32 fill an AVX2 vector, half an AVX-512
+/// one).
+const LANES: usize = 8;
+
 /// The largest filter radius a scan takes (⌈3σ⌉ ≤ 30 for σ ≤ 10 px).
 const MAX_RADIUS: usize = 30;
-
-/// Eight candidates' flags make one byte-word of the mask gathering; the passes also run this
-/// many entries past the last line, so that they end on whole vectors.
-const BLOCK: usize = 8;
-
-/// Entries past the last line, so that every pass can run over whole blocks and read its
-/// neighbours (the filter reaches 2r ahead) without a bounds check per entry. The values there
-/// are stale and nothing reads their results.
-const SLACK: usize = 2 * MAX_RADIUS + 2 * BLOCK;
 
 /// The fraction mask of a fixed-point position.
 const FRAC: i32 = (1 << FIX_BITS) - 1;
@@ -40,27 +39,35 @@ const FRAC: i32 = (1 << FIX_BITS) - 1;
 /// The edge scan of a set of lines; reused from hypothesis to hypothesis.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct LineScan {
-    /// First candidate offset, candidates per line, samples per line, filter radius, stride.
+    /// First candidate offset, candidates per line, samples per line, filter radius.
     klo: i64,
     candidates: usize,
     count: usize,
     radius: usize,
-    stride: usize,
-    /// Lines added since [`Self::begin`].
+    /// Lines added since [`Self::begin`]: n, the stride of the interleaved entries.
     lines: usize,
-    /// Cell offsets of each line's samples from its first sample's cell, and fractions.
-    off: Vec<i32>,
+    /// Per line: the pixel index of its first sample's cell, and the fixed-point position of
+    /// its first sample relative to that cell (fractions) and its step.
+    base: Vec<i32>,
+    x: Vec<i32>,
+    y: Vec<i32>,
+    sx: Vec<i32>,
+    sy: Vec<i32>,
+    /// Per entry k·n + l: the cell's pixel index, and the fractions.
+    cell: Vec<i32>,
     fx: Vec<f32>,
     fy: Vec<f32>,
     /// The cells' pixel pairs, interleaved: (top left, top right) and (bottom left, bottom
-    /// right) of entry k at 2k and 2k + 1.
+    /// right) of entry i at 2i and 2i + 1.
     top: Vec<f32>,
     bottom: Vec<f32>,
     /// Samples.
     s: Vec<f32>,
-    /// Filter responses (entry i is centred on sample i + r).
+    /// Filter responses (entry k·n + l is centred on sample k + r of line l).
     d: Vec<f32>,
-    /// Edge flags (0 or 1); candidate j of a line is its response j + 1.
+    /// Per line: whether it is scanned ([`Self::place`]).
+    valid: Vec<bool>,
+    /// Edge flags (0 or 1); entry j·n + l is candidate j of line l (its response j + 1).
     flag: Vec<u8>,
     /// The edge mask of each line after [`Self::finish`].
     masks: Vec<u64>,
@@ -71,6 +78,7 @@ impl LineScan {
     /// `klo ..= khi`: samples at `klo − 1 − r ..= khi + 1 + r`, responses at
     /// `klo − 1 ..= khi + 1`. Returns false when such lines do not fit the scan (too long, or a
     /// filter too wide); every line then takes the general path.
+    #[inline(always)]
     pub(crate) fn begin(
         &mut self,
         det: &EdgeDetector,
@@ -80,6 +88,16 @@ impl LineScan {
     ) -> bool {
         self.lines = 0;
         self.masks.clear();
+        self.valid.clear();
+        for v in [
+            &mut self.base,
+            &mut self.x,
+            &mut self.y,
+            &mut self.sx,
+            &mut self.sy,
+        ] {
+            v.clear();
+        }
         let r = det.radius();
         let Ok(candidates) = usize::try_from(khi - klo + 1) else {
             return false;
@@ -88,109 +106,132 @@ impl LineScan {
         if count > SCAN_CAP || r > MAX_RADIUS {
             return false;
         }
-        // Lines are packed: a pass over all lines computes a few entries that straddle two
-        // lines, which nothing reads, rather than padding every line.
-        let stride = count;
-        (
-            self.klo,
-            self.candidates,
-            self.count,
-            self.radius,
-            self.stride,
-        ) = (klo, candidates, count, r, stride);
-        let len = max_lines * stride + SLACK;
+        (self.klo, self.candidates, self.count, self.radius) = (klo, candidates, count, r);
+        let len = max_lines.next_multiple_of(LANES) * count;
         if self.s.len() < len {
-            self.top.resize(2 * len, 0.0);
-            self.bottom.resize(2 * len, 0.0);
             for v in [&mut self.fx, &mut self.fy, &mut self.s, &mut self.d] {
                 v.resize(len, 0.0);
             }
-            self.off.resize(len, 0);
+            self.top.resize(2 * len, 0.0);
+            self.bottom.resize(2 * len, 0.0);
+            self.cell.resize(len, 0);
             self.flag.resize(len, 0);
         }
         true
     }
 
-    /// Adds the line c + k·n and reads its pixels: returns its index in the scan, or `None`
-    /// (nothing added) unless its samples all lie in [0, w − 1) × [0, h − 1), that is both end
-    /// points do, positions being linear in k. Positions are stepped in fixed point exactly as
-    /// [`GreyView::sample_line`]'s unclamped loop; relative to the first sample's cell they fit
-    /// an i32 (fewer than 64 samples, |n| ≤ 2). At most `max_lines` lines may be added.
-    #[inline]
-    pub(crate) fn push(
+    /// Places line l = c + k·n for every (c, n) of `lines` (n = (NaN, NaN): undefined) at lane
+    /// l of the scan, in one branch-free pass. A line is scanned ([`Self::scanned`]) when
+    /// `inside(c, n)` (its end points lie in the image, [`crate::lines`]'s test, branch-free)
+    /// and its samples
+    /// all lie in [0, w − 1) × [0, h − 1), that is both end points do in fixed point, positions
+    /// being linear in k; the other lanes read the first cell and nothing reads their masks.
+    /// Positions are stepped in fixed point exactly as [`GreyView::sample_line`]'s unclamped
+    /// loop; relative to the first sample's cell they fit an i32 (fewer than 64 samples,
+    /// |n| ≤ 2). At most `max_lines` lines.
+    #[inline(always)]
+    pub(crate) fn place(
         &mut self,
         image: &GreyView<'_>,
-        c: (f64, f64),
-        n: (f64, f64),
-    ) -> Option<usize> {
-        let (width, height) = (image.width(), image.height());
-        let one = (1i64 << FIX_BITS) as f64;
-        let fix = |v: f64| (v * one) as i64;
-        let (step_x, step_y) = (fix(n.0), fix(n.1));
-        // |n| ≤ 2 keeps every relative position below 2⁶·2²⁵ = 2³¹, and a width below 2²⁴
-        // every cell offset (|row| ≤ 2⁷).
-        let step_max = 2i64 << FIX_BITS;
-        if step_x.abs() > step_max || step_y.abs() > step_max || width >= 1 << 24 {
-            return None;
-        }
-        let lo = self.klo - 1 - self.radius as i64;
-        let (px, py) = (fix(c.0) + lo * step_x, fix(c.1) + lo * step_y);
-        let last = self.count as i64 - 1;
-        let (ex, ey) = (px + last * step_x, py + last * step_y);
-        let limit_x = (width as i64 - 1) << FIX_BITS;
-        let limit_y = (height as i64 - 1) << FIX_BITS;
-        let clear = |p: i64, limit: i64| (0..limit).contains(&p);
-        if !(clear(px, limit_x) && clear(ex, limit_x) && clear(py, limit_y) && clear(ey, limit_y)) {
-            return None;
-        }
-        let line = self.lines;
-        let at = line * self.stride;
-        // Whole SSE vectors: the entries past this line's belong to the next line (which
-        // rewrites them) or to the slack.
-        let whole = at..at + self.stride.next_multiple_of(4);
-        if self.s.len() < at + self.stride + SLACK {
-            return None;
-        }
-        // Positions relative to the first sample's cell: the fraction bits are those of the
-        // absolute position (the cell is a multiple of 2²⁴), the cell is the first one plus the
-        // integer part.
-        let base = (py >> FIX_BITS) as usize * width + (px >> FIX_BITS) as usize;
-        let start = (
-            (px & FRAC as i64) as i32,
-            (py & FRAC as i64) as i32,
-            step_x as i32,
-            step_y as i32,
-        );
-        cells(
-            &mut self.off[whole.clone()],
-            &mut self.fx[whole.clone()],
-            &mut self.fy[whole],
-            width as i32,
-            start,
-            1.0 / one as f32,
-        );
-        let run = at..at + self.count;
-        gather(
-            image.data(),
-            width,
-            base,
-            &self.off[run.clone()],
-            &mut self.top[2 * run.start..2 * run.end],
-            &mut self.bottom[2 * run.start..2 * run.end],
-        );
-        self.lines += 1;
-        Some(line)
-    }
-
-    /// Interpolates, filters and suppresses all lines added, leaving one edge mask per line:
-    /// [`Self::mask`].
-    pub(crate) fn finish(&mut self, det: &EdgeDetector) {
-        if self.lines == 0 {
+        lines: &[(Vector2<f64>, Vector2<f64>)],
+        inside: impl Fn(Vector2<f64>, Vector2<f64>) -> bool,
+    ) {
+        let n = lines.len();
+        // Lanes padded to whole groups of LANES, so that the passes run on whole vectors; the
+        // padding lanes read the first cell and are never scanned.
+        let lanes = n.next_multiple_of(LANES);
+        if lanes * self.count > self.s.len() {
             return;
         }
-        let total = self.lines * self.stride;
-        // Samples; the filter reads up to 2r entries past each response.
-        let samples = total + 2 * self.radius + BLOCK;
+        let (width, height) = (image.width() as i64, image.height() as i64);
+        let one = (1i64 << FIX_BITS) as f64;
+        let fix = |v: f64| trunc_i64(v * one);
+        // |n| ≤ 2 keeps every relative position below 2⁶·2²⁵ = 2³¹, and an image below 2³¹
+        // pixels every cell index.
+        let step_max = 2u64 << FIX_BITS;
+        let small = image.data().len() < 1 << 31;
+        let lo = self.klo - 1 - self.radius as i64;
+        let last = self.count as i64 - 1;
+        let limit_x = (width - 1) << FIX_BITS;
+        let limit_y = (height - 1) << FIX_BITS;
+        let clear = |p: i64, limit: i64| (p >= 0) & (p < limit);
+        for v in [
+            &mut self.base,
+            &mut self.x,
+            &mut self.y,
+            &mut self.sx,
+            &mut self.sy,
+        ] {
+            v.clear();
+            v.resize(lanes, 0);
+        }
+        self.valid.clear();
+        self.valid.resize(lanes, false);
+        let (base, x, y) = (&mut self.base[..n], &mut self.x[..n], &mut self.y[..n]);
+        let (sx, sy, valid) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.valid[..n]);
+        let lines = &lines[..n];
+        for l in 0..n {
+            let (c, d) = lines[l];
+            let (step_x, step_y) = (fix(d.x), fix(d.y));
+            // Wrapping: a huge step gives garbage here, which the step test then rejects.
+            let px = fix(c.x).wrapping_add(lo.wrapping_mul(step_x));
+            let py = fix(c.y).wrapping_add(lo.wrapping_mul(step_y));
+            let ex = px.wrapping_add(last.wrapping_mul(step_x));
+            let ey = py.wrapping_add(last.wrapping_mul(step_y));
+            let ok = inside(c, d)
+                & small
+                & (step_x.unsigned_abs() <= step_max)
+                & (step_y.unsigned_abs() <= step_max)
+                & clear(px, limit_x)
+                & clear(ex, limit_x)
+                & clear(py, limit_y)
+                & clear(ey, limit_y);
+            let pick = |v: i64| if ok { v } else { 0 };
+            let (px, py) = (pick(px), pick(py));
+            // Positions relative to the first sample's cell: the fraction bits are those of
+            // the absolute position (the cell is a multiple of 2²⁴), the cell is the first one
+            // plus the integer part.
+            base[l] = ((py >> FIX_BITS) * width + (px >> FIX_BITS)) as i32;
+            x[l] = (px & FRAC as i64) as i32;
+            y[l] = (py & FRAC as i64) as i32;
+            sx[l] = pick(step_x) as i32;
+            sy[l] = pick(step_y) as i32;
+            valid[l] = ok;
+        }
+        self.lines = lanes;
+    }
+
+    /// Whether lane `line` of the last [`Self::place`] is scanned.
+    #[inline]
+    pub(crate) fn scanned(&self, line: usize) -> bool {
+        self.valid.get(line).copied().unwrap_or(false)
+    }
+
+    /// Samples, interpolates, filters and suppresses all lines added, leaving one edge mask per
+    /// line: [`Self::mask`].
+    #[inline(always)]
+    pub(crate) fn finish(&mut self, image: &GreyView<'_>, det: &EdgeDetector) {
+        let n = self.lines;
+        if n == 0 {
+            return;
+        }
+        let (count, r) = (self.count, self.radius);
+        let samples = count * n;
+        cells(
+            &mut self.cell[..samples],
+            &mut self.fx[..samples],
+            &mut self.fy[..samples],
+            image.width() as i32,
+            (&self.base, &self.x, &self.y, &self.sx, &self.sy),
+            1.0 / (1i64 << FIX_BITS) as f32,
+        );
+        gather(
+            image.data(),
+            image.width(),
+            &self.cell[..samples],
+            &mut self.top[..2 * samples],
+            &mut self.bottom[..2 * samples],
+        );
         interpolate(
             &self.top[..2 * samples],
             &self.bottom[..2 * samples],
@@ -198,35 +239,27 @@ impl LineScan {
             &self.fy[..samples],
             &mut self.s[..samples],
         );
-        // Responses and |d|; suppression reads two entries past each candidate.
-        let responses = total + BLOCK;
-        respond(det.taps(), &self.s, &mut self.d[..responses]);
-        flags(det, &self.d, &mut self.flag[..total]);
+        // Responses at sample offsets r ..= count − 1 − r of every line.
+        let responses = (count - 2 * r) * n;
+        respond(det.taps(), n, &self.s[..samples], &mut self.d[..responses]);
+        let flagged = self.candidates * n;
+        flags(det, n, &self.d[..responses], &mut self.flag[..flagged]);
         self.masks.clear();
-        let keep = if self.candidates >= 64 {
-            u64::MAX
-        } else {
-            (1u64 << self.candidates) - 1
-        };
-        let chunks = self.candidates.div_ceil(BLOCK);
-        for line in 0..self.lines {
-            let at = line * self.stride;
-            let mut mask = 0u64;
-            for b in 0..chunks {
-                let from = at + b * BLOCK;
-                let Some(&bytes) = self.flag.get(from..).and_then(|f| f.first_chunk::<BLOCK>())
-                else {
+        self.masks.resize(n, 0);
+        // A group of lanes at a time, its masks kept in registers over the candidates (no
+        // read-modify-write of stored masks from one candidate to the next).
+        let flag = &self.flag[..flagged];
+        for (g, masks) in self.masks.chunks_exact_mut(LANES).enumerate() {
+            let mut acc = [0u64; LANES];
+            for (j, row) in flag.chunks_exact(n).enumerate() {
+                let Some(f) = row.get(g * LANES..).and_then(|f| f.first_chunk::<LANES>()) else {
                     break;
                 };
-                // Gathers the low bit of each of the eight bytes into the top byte: with bytes
-                // b_i ∈ {0, 1}, the product's term b_i·2^(8i)·2^(56−7i) = b_i·2^(56+i), and
-                // every other term lands on a distinct bit outside the top byte (no carries).
-                // Bytes past the line's candidates belong to the next line (or are stale) and
-                // are masked off.
-                let bits = u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56;
-                mask |= bits << (b * BLOCK);
+                for t in 0..LANES {
+                    acc[t] |= u64::from(f[t]) << j;
+                }
             }
-            self.masks.push(mask & keep);
+            masks.copy_from_slice(&acc);
         }
     }
 
@@ -241,67 +274,93 @@ impl LineScan {
     /// [`EdgeDetector::vertex`] added to `klo + j`.
     #[inline]
     pub(crate) fn offset(&self, line: usize, j: u32) -> f64 {
-        let i = line * self.stride + j as usize;
-        let (am, a0, ap) = match self.d.get(i..i + 3) {
-            Some(&[dm, d0, dp]) => (dm.abs(), d0.abs(), dp.abs()),
-            _ => (0.0, 0.0, 0.0),
-        };
+        let n = self.lines;
+        let i = j as usize * n + line;
+        let a = |i: usize| self.d.get(i).map_or(0.0, |d| d.abs());
+        let (am, a0, ap) = (a(i), a(i + n), a(i + 2 * n));
         (self.klo + i64::from(j)) as f64 + f64::from(EdgeDetector::vertex(am, a0, ap))
     }
 }
 
-/// The cell offsets (row · width + column, relative to the first cell) and the fractions of the
-/// fixed-point positions (x, y) + k·(sx, sy): one vector pass.
+/// `v as i64` for |v| < 2⁵⁰ (fixed-point positions of lines inside any image), in float and
+/// integer arithmetic that vectorises (the saturating conversion `as` does not). Other values
+/// give an unspecified integer, without panicking.
+#[inline(always)]
+fn trunc_i64(v: f64) -> i64 {
+    // Adding 1.5·2⁵² rounds to an integer (to nearest) and puts it in the low mantissa bits.
+    const MAGIC: f64 = 6_755_399_441_055_744.0;
+    let r = (v + MAGIC) - MAGIC;
+    // Towards zero: one step back where rounding went away from zero (exact for |v| < 2⁵⁰).
+    let r = if v >= 0.0 && r > v {
+        r - 1.0
+    } else if v < 0.0 && r < v {
+        r + 1.0
+    } else {
+        r
+    };
+    ((r + MAGIC).to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64)
+}
+
+/// Per line: its first cell, its position (x, y) relative to it and its step (sx, sy), as
+/// [`LineScan`] keeps them.
+type Starts<'a> = (&'a [i32], &'a [i32], &'a [i32], &'a [i32], &'a [i32]);
+
+/// The cell indices (row · width + column) and the fractions of the fixed-point positions of
+/// every line's samples: entry k·n + l is line l's position (x, y) + k·(sx, sy) relative to its
+/// first cell `base`. One vector pass over the lines per sample.
 #[inline(always)]
 fn cells(
-    off: &mut [i32],
+    cell: &mut [i32],
     fx: &mut [f32],
     fy: &mut [f32],
     width: i32,
-    (mut x, mut y, sx, sy): (i32, i32, i32, i32),
+    (base, x, y, sx, sy): Starts<'_>,
     scale: f32,
 ) {
-    let n = off.len();
-    let (fx, fy) = (&mut fx[..n], &mut fy[..n]);
-    for k in 0..n {
-        off[k] = (y >> FIX_BITS) * width + (x >> FIX_BITS);
-        fx[k] = (x & FRAC) as f32 * scale;
-        fy[k] = (y & FRAC) as f32 * scale;
-        x += sx;
-        y += sy;
+    let n = base.len();
+    let (x, y, sx, sy) = (&x[..n], &y[..n], &sx[..n], &sy[..n]);
+    let rows = cell
+        .chunks_exact_mut(n)
+        .zip(fx.chunks_exact_mut(n))
+        .zip(fy.chunks_exact_mut(n));
+    for (k, ((cell, fx), fy)) in rows.enumerate() {
+        let (cell, fx, fy) = (&mut cell[..n], &mut fx[..n], &mut fy[..n]);
+        // (x, y) + k·(sx, sy), the same integers as stepping k times (no overflow: every
+        // relative position fits an i32), without reading back positions stored by the
+        // previous sample (a store-forwarding stall with wide vectors).
+        let k = k as i32;
+        for l in 0..n {
+            let (xk, yk) = (x[l] + k * sx[l], y[l] + k * sy[l]);
+            cell[l] = base[l] + (yk >> FIX_BITS) * width + (xk >> FIX_BITS);
+            fx[l] = (xk & FRAC) as f32 * scale;
+            fy[l] = (yk & FRAC) as f32 * scale;
+        }
     }
 }
 
-/// The 2×2 cells' pixel pairs at `base + off[k]`: the only scalar pass (two 8-byte reads and
-/// writes per sample). Kept out of line so that its loop gets the registers to itself.
+/// The 2×2 cells' pixel pairs at `cell[i]`: the only scalar pass (two 8-byte reads and writes
+/// per sample). Kept out of line so that its loop gets the registers to itself.
 #[inline(never)]
-fn gather(
-    data: &[f32],
-    width: usize,
-    base: usize,
-    off: &[i32],
-    top: &mut [f32],
-    bottom: &mut [f32],
-) {
-    let n = off.len();
+fn gather(data: &[f32], width: usize, cell: &[i32], top: &mut [f32], bottom: &mut [f32]) {
+    let n = cell.len();
     let (top, bottom) = (&mut top[..2 * n], &mut bottom[..2 * n]);
-    let cell = |o: i32| {
-        let i = base.wrapping_add_signed(o as isize);
+    let quad = |c: i32| {
+        let i = c as usize;
         // One bounds check for the 2×2 cell.
         let quad = &data[i..i + width + 2];
         ([quad[0], quad[1]], [quad[width], quad[width + 1]])
     };
     // Two samples per iteration.
-    let (pairs, rest) = off.as_chunks::<2>();
+    let (pairs, rest) = cell.as_chunks::<2>();
     let (top2, top1) = top.as_chunks_mut::<4>();
     let (bottom2, bottom1) = bottom.as_chunks_mut::<4>();
-    for ((&[o0, o1], t), b) in pairs.iter().zip(top2).zip(bottom2) {
-        let ((t0, b0), (t1, b1)) = (cell(o0), cell(o1));
+    for ((&[c0, c1], t), b) in pairs.iter().zip(top2).zip(bottom2) {
+        let ((t0, b0), (t1, b1)) = (quad(c0), quad(c1));
         *t = [t0[0], t0[1], t1[0], t1[1]];
         *b = [b0[0], b0[1], b1[0], b1[1]];
     }
-    if let (Some(&o), true, true) = (rest.first(), top1.len() == 2, bottom1.len() == 2) {
-        let (t, b) = cell(o);
+    if let (Some(&c), true, true) = (rest.first(), top1.len() == 2, bottom1.len() == 2) {
+        let (t, b) = quad(c);
         top1.copy_from_slice(&t);
         bottom1.copy_from_slice(&b);
     }
@@ -323,17 +382,17 @@ fn interpolate(top: &[f32], bottom: &[f32], fx: &[f32], fy: &[f32], s: &mut [f32
     }
 }
 
-/// `d[i] = Σ_j w_j (s_{i+r+j} − s_{i+r−j})` for every entry of `d`, summed from 0.0 in
-/// increasing j as [`EdgeDetector::fill_derivatives`] (radius 3 unrolled). Needs
-/// `d.len() + 2r ≤ s.len()`.
+/// `d[i] = Σ_j w_j (s_{i+(r+j)n} − s_{i+(r−j)n})` for every entry of `d` (n lines
+/// interleaved), summed from 0.0 in increasing j as [`EdgeDetector::fill_derivatives`] (radius 3
+/// unrolled). Needs `d.len() + 2rn ≤ s.len()`.
 #[inline(always)]
-fn respond(taps: &[f32], s: &[f32], d: &mut [f32]) {
+fn respond(taps: &[f32], n: usize, s: &[f32], d: &mut [f32]) {
     let m = d.len();
+    let at = |k: usize| &s[k * n..k * n + m];
     if let [w1, w2, w3] = *taps {
-        let s = &s[..m + 6];
-        let (p1, m1) = (&s[4..4 + m], &s[2..2 + m]);
-        let (p2, m2) = (&s[5..5 + m], &s[1..1 + m]);
-        let (p3, m3) = (&s[6..6 + m], &s[..m]);
+        let (p1, m1) = (at(4), at(2));
+        let (p2, m2) = (at(5), at(1));
+        let (p3, m3) = (at(6), at(0));
         for i in 0..m {
             // The general path sums from 0.0, which differs only in the sign of a zero
             // response: nothing downstream (|d|, d > 0, d < 0) can tell.
@@ -341,10 +400,9 @@ fn respond(taps: &[f32], s: &[f32], d: &mut [f32]) {
         }
     } else {
         let r = taps.len();
-        let s = &s[..m + 2 * r];
         d.fill(0.0);
         for (j, w) in taps.iter().enumerate() {
-            let (p, q) = (&s[r + j + 1..r + j + 1 + m], &s[r - j - 1..r - j - 1 + m]);
+            let (p, q) = (at(r + j + 1), at(r - j - 1));
             for i in 0..m {
                 d[i] += w * (p[i] - q[i]);
             }
@@ -352,27 +410,50 @@ fn respond(taps: &[f32], s: &[f32], d: &mut [f32]) {
     }
 }
 
-/// `flag[j]` = whether response j + 1 is an edge: polarity, threshold and non-maximum
-/// suppression on |d| as [`EdgeDetector::peak`]. Needs `flag.len() + 2 ≤ d.len()`.
+/// `flag[i]` = whether response i + n is an edge (n lines interleaved): polarity, threshold and
+/// non-maximum suppression on |d| as [`EdgeDetector::peak`]. Needs `flag.len() + 2n ≤ d.len()`.
 #[inline(always)]
-fn flags(det: &EdgeDetector, d: &[f32], flag: &mut [u8]) {
+fn flags(det: &EdgeDetector, n: usize, d: &[f32], flag: &mut [u8]) {
     // The polarity test as a loop-invariant closure, so that `Any` costs nothing.
     let threshold = det.settings().threshold;
     match det.settings().polarity {
-        Polarity::Any => flags_with(d, flag, threshold, |_| true),
-        Polarity::Rising => flags_with(d, flag, threshold, |d| d > 0.0),
-        Polarity::Falling => flags_with(d, flag, threshold, |d| d < 0.0),
+        Polarity::Any => flags_with(n, d, flag, threshold, |_| true),
+        Polarity::Rising => flags_with(n, d, flag, threshold, |d| d > 0.0),
+        Polarity::Falling => flags_with(n, d, flag, threshold, |d| d < 0.0),
     }
 }
 
 #[inline(always)]
-fn flags_with(d: &[f32], flag: &mut [u8], threshold: f32, keep: impl Fn(f32) -> bool) {
-    let n = flag.len();
-    let (dm, d0, dp) = (&d[..n], &d[1..n + 1], &d[2..n + 2]);
-    for j in 0..n {
+fn flags_with(n: usize, d: &[f32], flag: &mut [u8], threshold: f32, keep: impl Fn(f32) -> bool) {
+    let m = flag.len();
+    let (dm, d0, dp) = (&d[..m], &d[n..n + m], &d[2 * n..2 * n + m]);
+    for j in 0..m {
         let (am, a0, ap) = (dm[j].abs(), d0[j].abs(), dp[j].abs());
         // The asymmetric comparison keeps one sample of a plateau.
         let edge = keep(d0[j]) & (a0 >= threshold) & (a0 >= am) & (a0 > ap);
         flag[j] = u8::from(edge);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trunc_i64_is_the_conversion_in_range() {
+        let mut values = vec![0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5, 2.5, -2.5];
+        let big = (1u64 << 50) as f64;
+        values.extend([big - 1.0, -(big - 1.0), big - 0.5, -(big - 0.5)]);
+        let mut x = 0.123_456_789f64;
+        for _ in 0..10_000 {
+            // Pseudo-random magnitudes over the whole range, fractions of every kind.
+            x = (x * 9_301.0 + 49_297.0) % 233_280.0;
+            let v = (x / 233_280.0 - 0.5) * 2f64.powi((x as i32) % 51);
+            values.push(v);
+            values.push(v * 16_777_216.0 % big);
+        }
+        for v in values {
+            assert_eq!(trunc_i64(v), v as i64, "{v}");
+        }
     }
 }

@@ -437,7 +437,7 @@ impl WuLikelihood {
     }
 
     /// Σ over the lines of `pose` of `line(m(L), candidate offsets, observed length)`
-    /// ([`MeasurementLines::count_edges`]), in line order. The workspace is left with no lines.
+    /// ([`MeasurementLines::count_edges_in`]), in line order. The workspace is left with no lines.
     #[inline]
     fn sum_lines<F>(
         &self,
@@ -456,14 +456,14 @@ impl WuLikelihood {
                 index: 0,
             });
         }
-        let near = self.model.half_window;
+        let window = ws.window_bits(self.model.half_window);
         let half = self.settings.lines.half_length() as i64;
         ws.clear();
         ws.scan_lines(image, &self.contour, pose, -half, half);
         // −0.0, the neutral element of `Iterator::sum` for floats.
         let mut total = -0.0;
         for i in 0..self.contour.len() {
-            let (length, m_l) = ws.count_edges(image, i, near);
+            let (length, m_l) = ws.count_edges_in(image, i, window);
             total += line(m_l, ws.candidates(), length);
         }
         ws.clear();
