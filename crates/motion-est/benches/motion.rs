@@ -10,42 +10,9 @@ use motion_est::{
     Settings, Workspace,
 };
 
-const W: usize = 320;
-const H: usize = 240;
-
-/// A textured pair: frame 1 is frame 0 displaced by (3, −2) px plus `zoom`·(x, y) about the centre
-/// (zoom = 0 for the translation model, 0.03 — a 3 % zoom — for the others, so every model fits).
-fn pair(zoom: f64) -> (Vec<f32>, Vec<f32>) {
-    let comps: Vec<[f64; 3]> = (0..60)
-        .map(|i| {
-            let f = i as f64;
-            let lambda = 3.0 + 37.0 * ((f * 0.618_034) % 1.0);
-            let dir = f * 2.399_963;
-            let k = std::f64::consts::TAU / lambda;
-            [k * dir.cos(), k * dir.sin(), f * 1.3]
-        })
-        .collect();
-    let tex = |x: f64, y: f64| {
-        128.0
-            + 7.3
-                * comps
-                    .iter()
-                    .map(|c| (c[0] * x + c[1] * y + c[2]).sin())
-                    .sum::<f64>()
-    };
-    let (cx, cy) = (159.5, 119.5);
-    let f0 = (0..W * H)
-        .map(|k| tex((k % W) as f64, (k / W) as f64) as f32)
-        .collect();
-    let f1 = (0..W * H)
-        .map(|k| {
-            let (x, y) = ((k % W) as f64 - cx, (k / W) as f64 - cy);
-            // Inverse of d = (3 + zoom·x, −2 + zoom·y).
-            tex(cx + (x - 3.0) / (1.0 + zoom), cy + (y + 2.0) / (1.0 + zoom)) as f32
-        })
-        .collect();
-    (f0, f1)
-}
+#[path = "../examples/common/pair.rs"]
+mod pair;
+use pair::{H, W, pair};
 
 fn region(size: usize) -> Region<'static> {
     if size >= W {

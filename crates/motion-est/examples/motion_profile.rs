@@ -12,40 +12,9 @@ use motion_est::{
     Settings, Workspace,
 };
 
-const W: usize = 320;
-const H: usize = 240;
-
-/// The bench's pair: 60 sinusoids, (3, −2) + 3 % zoom about the centre.
-fn pair(zoom: f64) -> (Vec<f32>, Vec<f32>) {
-    let comps: Vec<[f64; 3]> = (0..60)
-        .map(|i| {
-            let f = i as f64;
-            let lambda = 3.0 + 37.0 * ((f * 0.618_034) % 1.0);
-            let dir = f * 2.399_963;
-            let k = std::f64::consts::TAU / lambda;
-            [k * dir.cos(), k * dir.sin(), f * 1.3]
-        })
-        .collect();
-    let tex = |x: f64, y: f64| {
-        128.0
-            + 7.3
-                * comps
-                    .iter()
-                    .map(|c| (c[0] * x + c[1] * y + c[2]).sin())
-                    .sum::<f64>()
-    };
-    let (cx, cy) = (159.5, 119.5);
-    let f0 = (0..W * H)
-        .map(|k| tex((k % W) as f64, (k / W) as f64) as f32)
-        .collect();
-    let f1 = (0..W * H)
-        .map(|k| {
-            let (x, y) = ((k % W) as f64 - cx, (k / W) as f64 - cy);
-            tex(cx + (x - 3.0) / (1.0 + zoom), cy + (y + 2.0) / (1.0 + zoom)) as f32
-        })
-        .collect();
-    (f0, f1)
-}
+#[path = "common/pair.rs"]
+mod pair;
+use pair::{H, W, pair};
 
 /// Runs `f` `n` times in 20 batches; the minimum and median batch means (ms): the minimum is
 /// the figure least affected by other processes on a shared machine.
