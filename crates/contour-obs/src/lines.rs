@@ -396,12 +396,8 @@ impl MeasurementLines {
         if !self.whole_observed {
             return 0;
         }
-        let mut mask = self.scan.mask(line);
-        while mask != 0 {
-            self.edges
-                .push(self.scan.offset(line, mask.trailing_zeros()));
-            mask &= mask - 1;
-        }
+        self.edges
+            .extend(self.scan.offsets(line, self.scan.mask(line)));
         examined
     }
 
@@ -508,12 +504,7 @@ impl MeasurementLines {
             return (self.length_of(0), 0);
         }
         let mask = self.scan.mask(line);
-        let mut near_mask = window & mask;
-        while near_mask != 0 {
-            self.edges
-                .push(self.scan.offset(line, near_mask.trailing_zeros()));
-            near_mask &= near_mask - 1;
-        }
+        self.edges.extend(self.scan.offsets(line, window & mask));
         // All L + 1 offsets examined.
         (self.whole_length, mask.count_ones() as usize)
     }
@@ -574,14 +565,9 @@ impl MeasurementLines {
         if !self.whole_observed {
             return f64::INFINITY;
         }
-        let mut best = f64::INFINITY;
-        let mut mask = self.scan.mask(line);
-        while mask != 0 {
-            let z = self.scan.offset(line, mask.trailing_zeros());
-            best = best.min(z * z);
-            mask &= mask - 1;
-        }
-        best
+        self.scan
+            .offsets(line, self.scan.mask(line))
+            .fold(f64::INFINITY, |best, z| best.min(z * z))
     }
 
     /// [`Self::nearest_edge_sq`] on the general path (`search` ≤ L/2).

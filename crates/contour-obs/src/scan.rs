@@ -270,6 +270,19 @@ impl LineScan {
         self.masks.get(line).copied().unwrap_or(0)
     }
 
+    /// The sub-pixel offsets of the edges of line `line` whose bits are set in `mask` (a subset of
+    /// [`Self::mask`]), in increasing order.
+    #[inline]
+    pub(crate) fn offsets(&self, line: usize, mut mask: u64) -> impl Iterator<Item = f64> + '_ {
+        std::iter::from_fn(move || {
+            (mask != 0).then(|| {
+                let j = mask.trailing_zeros();
+                mask &= mask - 1;
+                self.offset(line, j)
+            })
+        })
+    }
+
     /// The sub-pixel offset of candidate bit `j` of line `line`: the parabola vertex of
     /// [`EdgeDetector::vertex`] added to `klo + j`.
     #[inline]
