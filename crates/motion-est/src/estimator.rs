@@ -26,8 +26,9 @@
 use nalgebra::{Matrix2, Matrix6, SMatrix, SVector};
 
 use crate::image::ImageView;
+use crate::meat::{Cell, Grid, cubic_weights, simd};
 use crate::model::{ModelSpec, MotionModel};
-use crate::pyramid::{KERNEL, Level, Pyramid, Window};
+use crate::pyramid::{Level, Pyramid, Window};
 use crate::region::{PixelBox, Region};
 use crate::robust::{RobustFunction, robust_scale_from};
 use crate::{Error, Result};
@@ -234,18 +235,18 @@ pub struct Workspace {
     bands: Vec<Band>,
     /// Per span, the range of sample rows of its valid pixels (for the covariance grid's bands).
     span_rows: Vec<(u32, u32)>,
-    /// Per band of the covariance's dense grid: its channel planes and a convolution buffer.
-    grids: Vec<(Vec<f32>, Vec<f32>)>,
+    /// Per band of the covariance's dense grid: its cells and a convolution buffer.
+    grids: Vec<(Vec<Cell>, Vec<Cell>)>,
 }
 
 /// A run of `len` consecutive region pixels on level row `j` from column `i0`, stored from entry
 /// `k0` of the workspace's per-pixel arrays.
 #[derive(Debug, Clone, Copy, Default)]
-struct Span {
-    j: usize,
-    i0: usize,
-    len: usize,
-    k0: usize,
+pub(crate) struct Span {
+    pub(crate) j: usize,
+    pub(crate) i0: usize,
+    pub(crate) len: usize,
+    pub(crate) k0: usize,
 }
 
 impl Workspace {
@@ -822,7 +823,7 @@ impl<const N: usize> Default for Lanes<N> {
 }
 
 impl<const N: usize> Lanes<N> {
-    #[inline]
+    #[inline(always)]
     fn add<const PSI: bool>(
         &mut self,
         j: &[[f32; 8]; N],
@@ -926,27 +927,14 @@ fn solve(h: &Mat7, b: &Vec7, n: usize) -> Option<Vec7> {
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
-#[inline]
+#[inline(always)]
 fn bilinear(d: &[f32], i00: usize, w: usize, fx: f32, fy: f32) -> f32 {
     let top = d[i00] + fx * (d[i00 + 1] - d[i00]);
     let bot = d[i00 + w] + fx * (d[i00 + w + 1] - d[i00 + w]);
     top + fy * (bot - top)
 }
 
-/// Keys cubic convolution weights (a = −0.5) for taps −1, 0, 1, 2 at fraction f.
-#[inline]
-fn cubic_weights(f: f32) -> [f32; 4] {
-    let f2 = f * f;
-    let f3 = f2 * f;
-    [
-        -0.5 * f3 + f2 - 0.5 * f,
-        1.5 * f3 - 2.5 * f2 + 1.0,
-        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
-        0.5 * f3 - 0.5 * f2,
-    ]
-}
-
-#[inline]
+#[inline(always)]
 fn bicubic(d: &[f32], i00: usize, w: usize, fx: f32, fy: f32) -> f32 {
     let wx = cubic_weights(fx);
     let wy = cubic_weights(fy);
@@ -1186,7 +1174,10 @@ impl Workspace {
         };
         let (spans, idx) = (&self.spans[..], &self.idx[..]);
         if !par {
-            return ctx.spans(spans, idx, 0, out);
+            return simd(
+                #[inline(always)]
+                || ctx.spans(spans, idx, 0, out),
+            );
         }
         // Every pixel's outputs depend on that pixel alone: the bands write disjoint slices.
         let mut outs = Vec::with_capacity(self.bands.len());
@@ -1197,7 +1188,10 @@ impl Workspace {
             rest = tail;
         }
         map_bands(outs, |(band, o)| {
-            ctx.spans(&spans[band.s0..band.s1], idx, band.k0, o)
+            simd(
+                #[inline(always)]
+                || ctx.spans(&spans[band.s0..band.s1], idx, band.k0, o),
+            )
         })
         .into_iter()
         .sum()
@@ -1337,7 +1331,10 @@ impl Workspace {
         R: Fn(&Group, &[f32; 8], f32) -> [[f32; 8]; 5] + Sync,
     {
         let band = |spans: &[Span]| {
-            self.accumulate_band::<P, N, PSI, F, R>(spans, s, o, weights, &rows, map)
+            simd(
+                #[inline(always)]
+                || self.accumulate_band::<P, N, PSI, F, R>(spans, s, o, weights, &rows, map),
+            )
         };
         // Bands whenever the region has several, with or without the `parallel` feature, so that
         // the sums are the same either way.
@@ -1493,7 +1490,10 @@ impl Workspace {
             }
             let spans = &self.spans;
             let sums = map_bands(parts, |(band, u)| {
-                ctx.spans(&spans[band.s0..band.s1], band.k0, u)
+                simd(
+                    #[inline(always)]
+                    || ctx.spans(&spans[band.s0..band.s1], band.k0, u),
+                )
             });
             let mut total = (0.0f64, 0usize, 0.0f64, 0.0f64);
             for (g, n, mi, ma) in sums {
@@ -1501,7 +1501,10 @@ impl Workspace {
             }
             total
         } else {
-            ctx.spans(&self.spans, 0, &mut self.u)
+            simd(
+                #[inline(always)]
+                || ctx.spans(&self.spans, 0, &mut self.u),
+            )
         };
         if n_in == 0 {
             return Err(Error::Degenerate { level: 0 });
@@ -1633,8 +1636,11 @@ impl Workspace {
             .enumerate()
             .map(|(b, buf)| (b * rows_per, ((b + 1) * rows_per).min(bh), buf))
             .collect();
-        let parts = map_bands(items, |(r0, r1, (planes, tmp))| {
-            grid.band(r0, r1, planes, tmp)
+        let parts = map_bands(items, |(r0, r1, (cells, tmp))| {
+            simd(
+                #[inline(always)]
+                || grid.band(r0, r1, cells, tmp),
+            )
         });
         let mut m = Mat7::zeros();
         for part in parts {
@@ -1646,228 +1652,6 @@ impl Workspace {
 
 /// Grid rows per band of the covariance grid for large regions (see `Workspace::meat`).
 const GRID_BAND_ROWS: usize = 128;
-
-/// The covariance grid of one frame: `n` planes of `bw`×`bh` cells (origin (`ox`, `oy`) in the
-/// level), onto which the per-pixel vectors `u` are scattered at `pos` (through the interpolation
-/// taps at fractions (`fx`, `fy`) for the second frame, `l1`), then convolved.
-struct Grid<'a> {
-    n: usize,
-    bw: usize,
-    bh: usize,
-    ox: isize,
-    oy: isize,
-    /// Half-width of the smoothing kernel (0 without pre-smoothing).
-    pad: usize,
-    /// Taps before and after the sample position (1 and 2 for the second frame, else 0).
-    taps: (usize, usize),
-    presmooth: bool,
-    l1: Option<&'a Level>,
-    u: &'a [[f32; 8]],
-    pos: &'a [(u32, u32)],
-    valid: &'a [u8],
-    fx: &'a [f32],
-    fy: &'a [f32],
-    spans: &'a [Span],
-    /// Per span, the lowest and highest sample row of its valid pixels.
-    span_rows: &'a [(u32, u32)],
-}
-
-impl Grid<'_> {
-    /// Σ v vᵀ over grid rows `r0..r1`, computed on rows `r0 − pad .. r1 + pad` (the halo the
-    /// convolution reads) in `planes`, with `tmp` for the convolution.
-    fn band(&self, r0: usize, r1: usize, planes: &mut Vec<f32>, tmp: &mut Vec<f32>) -> Mat7 {
-        let (n, bw) = (self.n, self.bw);
-        let (lr0, lr1) = (r0.saturating_sub(self.pad), (r1 + self.pad).min(self.bh));
-        let lh = lr1 - lr0;
-        let plane = bw * lh;
-        planes.clear();
-        planes.resize(n * plane, 0.0);
-        let (tap_lo, tap_hi) = self.taps;
-        let ntap = tap_lo + tap_hi + 1;
-        for (sp, &(lo, hi)) in self.spans.iter().zip(self.span_rows) {
-            // Grid rows the span's taps reach.
-            if lo > hi {
-                continue;
-            }
-            let first = (lo as isize - tap_lo as isize - self.oy) as usize;
-            let last = (hi as isize - tap_lo as isize - self.oy) as usize + ntap;
-            if last <= lr0 || first >= lr1 {
-                continue;
-            }
-            for k in sp.k0..sp.k0 + sp.len {
-                if self.valid[k] == 0 {
-                    continue;
-                }
-                let u = &self.u[k];
-                if u[..n].iter().all(|&v| v == 0.0) {
-                    continue;
-                }
-                let (x, y) = (self.pos[k].0 as usize, self.pos[k].1 as usize);
-                let gy = (y as isize - tap_lo as isize - self.oy) as usize;
-                if gy + ntap <= lr0 || gy >= lr1 {
-                    continue;
-                }
-                match self.l1 {
-                    None => {
-                        let cell = (gy - lr0) * bw + (x as isize - self.ox) as usize;
-                        for (a, ua) in u.iter().enumerate().take(n) {
-                            planes[a * plane + cell] = *ua;
-                        }
-                    }
-                    Some(l) => {
-                        let (fx, fy) = (self.fx[k], self.fy[k]);
-                        // The same taps as `evaluate`: cubic inside, bilinear on the border.
-                        let (wx, wy) = if x >= 1 && y >= 1 && x + 2 < l.width && y + 2 < l.height {
-                            (cubic_weights(fx), cubic_weights(fy))
-                        } else {
-                            ([0.0, 1.0 - fx, fx, 0.0], [0.0, 1.0 - fy, fy, 0.0])
-                        };
-                        let x0 = (x as isize - 1 - self.ox) as usize;
-                        if gy >= lr0 && gy + 4 <= lr1 {
-                            let y0 = gy - lr0;
-                            for (a, &ua) in u.iter().enumerate().take(n) {
-                                let p = &mut planes[a * plane..(a + 1) * plane];
-                                for (r, wyr) in wy.iter().enumerate() {
-                                    let row = &mut p[(y0 + r) * bw + x0..(y0 + r) * bw + x0 + 4];
-                                    let s = wyr * ua;
-                                    for (cell, wxc) in row.iter_mut().zip(wx) {
-                                        *cell += s * wxc;
-                                    }
-                                }
-                            }
-                        } else {
-                            // Straddles the band's edge: only the rows inside.
-                            for (a, &ua) in u.iter().enumerate().take(n) {
-                                let p = &mut planes[a * plane..(a + 1) * plane];
-                                for (r, wyr) in wy.iter().enumerate() {
-                                    let g = gy + r;
-                                    if g < lr0 || g >= lr1 {
-                                        continue;
-                                    }
-                                    let row = &mut p[(g - lr0) * bw + x0..(g - lr0) * bw + x0 + 4];
-                                    let s = wyr * ua;
-                                    for (cell, wxc) in row.iter_mut().zip(wx) {
-                                        *cell += s * wxc;
-                                    }
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        if self.presmooth {
-            for p in planes.chunks_exact_mut(plane) {
-                convolve_zero(p, bw, lh, tmp);
-            }
-        }
-        // Outer products over the band's own rows: all planes read together, 8 cells at a time.
-        let (c0, c1) = ((r0 - lr0) * bw, (r1 - lr0) * bw);
-        match n {
-            2 => outer_sum::<2>(planes, plane, c0, c1),
-            3 => outer_sum::<3>(planes, plane, c0, c1),
-            4 => outer_sum::<4>(planes, plane, c0, c1),
-            6 => outer_sum::<6>(planes, plane, c0, c1),
-            _ => outer_sum::<7>(planes, plane, c0, c1),
-        }
-    }
-}
-
-/// Σ_s v(s) v(s)ᵀ over cells `c0..c1` of `N` consecutive planes of `len` cells each: one pass reading
-/// eight cells of every plane at a time, upper triangle in f32 lanes flushed to f64 every 64
-/// groups (512 cells) so that the f32 sums stay short.
-fn outer_sum<const N: usize>(planes: &[f32], len: usize, c0: usize, c1: usize) -> Mat7 {
-    let mut lanes = [[[0.0f32; 8]; N]; N];
-    let mut total = [[0.0f64; N]; N];
-    let flush = |lanes: &mut [[[f32; 8]; N]; N], total: &mut [[f64; N]; N]| {
-        for a in 0..N {
-            for b in a..N {
-                total[a][b] += lanes[a][b].iter().map(|&v| f64::from(v)).sum::<f64>();
-                lanes[a][b] = [0.0; 8];
-            }
-        }
-    };
-    let (mut t, mut groups) = (c0, 0);
-    while t < c1 {
-        let cnt = (c1 - t).min(8);
-        let v: [[f32; 8]; N] = std::array::from_fn(|a| {
-            let mut x = [0.0f32; 8];
-            x[..cnt].copy_from_slice(&planes[a * len + t..a * len + t + cnt]);
-            x
-        });
-        for a in 0..N {
-            for b in a..N {
-                for l in 0..8 {
-                    lanes[a][b][l] += v[a][l] * v[b][l];
-                }
-            }
-        }
-        groups += 1;
-        if groups == 64 {
-            flush(&mut lanes, &mut total);
-            groups = 0;
-        }
-        t += 8;
-    }
-    flush(&mut lanes, &mut total);
-    let mut m = Mat7::zeros();
-    for a in 0..N {
-        for b in a..N {
-            m[(a, b)] = total[a][b];
-            m[(b, a)] = total[a][b];
-        }
-    }
-    m
-}
-
-/// In-place separable convolution of one plane with the binomial kernel, zero padding: the
-/// interior in five-tap windows over plain slices (vectorisable), the two-cell border rows and
-/// columns with the taps that fall inside.
-fn convolve_zero(data: &mut [f32], w: usize, h: usize, tmp: &mut Vec<f32>) {
-    let k = KERNEL;
-    let edge = |src: &dyn Fn(usize) -> f32, i: usize, n: usize| -> f32 {
-        let mut acc = 0.0;
-        for (t, &kv) in k.iter().enumerate() {
-            let x = i as isize + t as isize - 2;
-            if x >= 0 && (x as usize) < n {
-                acc += kv * src(x as usize);
-            }
-        }
-        acc
-    };
-    let (lo, hi) = (w.min(2), w.saturating_sub(2).max(w.min(2)));
-    // Horizontal pass into tmp (every cell is written: no need to clear it).
-    tmp.resize(w * h, 0.0);
-    for (row, out) in data.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
-        if w >= 5 {
-            for (o, v) in out[2..w - 2].iter_mut().zip(row.windows(5)) {
-                *o = k[0] * v[0] + k[1] * v[1] + k[2] * v[2] + k[3] * v[3] + k[4] * v[4];
-            }
-        }
-        for i in (0..lo).chain(hi..w) {
-            out[i] = edge(&|x| row[x], i, w);
-        }
-    }
-    // Vertical pass back into data.
-    for j in 0..h {
-        let out = &mut data[j * w..(j + 1) * w];
-        if j >= 2 && j + 2 < h {
-            let rows = &tmp[(j - 2) * w..(j + 3) * w];
-            let (r0, rest) = rows.split_at(w);
-            let (r1, rest) = rest.split_at(w);
-            let (r2, rest) = rest.split_at(w);
-            let (r3, r4) = rest.split_at(w);
-            let src = r0.iter().zip(r1).zip(r2).zip(r3).zip(r4);
-            for (o, ((((a, b), c), d), e)) in out.iter_mut().zip(src) {
-                *o = k[0] * a + k[1] * b + k[2] * c + k[3] * d + k[4] * e;
-            }
-        } else {
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = edge(&|y| tmp[y * w + i], j, h);
-            }
-        }
-    }
-}
 
 #[cfg(test)]
 mod tests {
@@ -2085,56 +1869,6 @@ mod tests {
     }
 
     #[test]
-    fn convolution_and_outer_sum_match_direct_sums() {
-        // Zero-padded binomial convolution against the direct 5×5 sum, on planes narrower and
-        // wider than the kernel; then the lane outer sum against a direct f64 sum. f32 arithmetic
-        // on values ≤ 1: agreement to 1e-5.
-        for (w, h) in [(1usize, 1usize), (3, 4), (4, 9), (9, 7), (23, 17)] {
-            let src: Vec<f32> = (0..w * h).map(|i| ((i * 37 % 11) as f32) / 11.0).collect();
-            let mut got = src.clone();
-            convolve_zero(&mut got, w, h, &mut Vec::new());
-            for j in 0..h {
-                for i in 0..w {
-                    let mut want = 0.0f64;
-                    for (ty, ky) in KERNEL.iter().enumerate() {
-                        for (tx, kx) in KERNEL.iter().enumerate() {
-                            let (x, y) =
-                                (i as isize + tx as isize - 2, j as isize + ty as isize - 2);
-                            if x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h {
-                                want += f64::from(ky * kx * src[y as usize * w + x as usize]);
-                            }
-                        }
-                    }
-                    let g = f64::from(got[j * w + i]);
-                    assert!(
-                        (g - want).abs() < 1e-5,
-                        "{w}x{h} at ({i}, {j}): {g} vs {want}"
-                    );
-                }
-            }
-            // Three planes of w·h cells.
-            let planes: Vec<f32> = (0..3 * w * h)
-                .map(|i| ((i * 53 % 13) as f32) / 13.0 - 0.5)
-                .collect();
-            let m = outer_sum::<3>(&planes, w * h, 0, w * h);
-            for a in 0..3 {
-                for b in 0..3 {
-                    let want: f64 = (0..w * h)
-                        .map(|c| {
-                            f64::from(planes[a * w * h + c]) * f64::from(planes[b * w * h + c])
-                        })
-                        .sum();
-                    assert!(
-                        (m[(a, b)] - want).abs() < 1e-5 * (1.0 + want.abs()),
-                        "{w}x{h}"
-                    );
-                }
-            }
-            assert_eq!(m[(3, 3)], 0.0);
-        }
-    }
-
-    #[test]
     fn lane_normal_equations_match_a_scalar_f64_reference() {
         // The f32 lane accumulation over row spans against a direct f64 sum with
         // `MotionModel::gradient_row`, for every model, with an offset and a redescending ρ
@@ -2336,6 +2070,7 @@ struct Warp<'l> {
 impl Warp<'_> {
     /// `evaluate` over `spans`, whose pixels start at entry `kb` (where `out` starts); `idx` is
     /// the whole pixel list. Returns the number of valid samples.
+    #[inline(always)]
     fn spans(&self, spans: &[Span], idx: &[u32], kb: usize, out: Samples<'_>) -> usize {
         let [cx, cy] = self.c;
         let [bx1, bx2, by1, by2] = self.b;
@@ -2484,6 +2219,7 @@ struct UVectors<'a> {
 impl UVectors<'_> {
     /// Fills `u` (entries from `kb` on) over `spans`; returns (Σ variance gain, inlier count,
     /// inlier weight, total weight).
+    #[inline(always)]
     fn spans(&self, spans: &[Span], kb: usize, u: &mut [[f32; 8]]) -> (f64, usize, f64, f64) {
         let (spec, s, c, o) = (self.spec, self.s, self.c, self.o);
         let ng = spec.model.geometric_len();

@@ -44,6 +44,7 @@
 pub mod error;
 pub mod estimator;
 pub mod image;
+mod meat;
 pub mod model;
 pub mod odobez;
 pub mod patch;

@@ -6,6 +6,7 @@
 //! which equals clamping to the image where the window touches the image border.
 
 use crate::image::ImageView;
+use crate::meat::simd;
 use crate::{Error, Result};
 
 /// The 1-D binomial kernel [1 4 6 4 1]/16 used for pre-smoothing and reduction.
@@ -165,10 +166,16 @@ impl Pyramid {
                 }
                 l0.data.extend_from_slice(row);
             }
-            if presmooth {
-                smooth_in_place(&mut l0.data, win.width, win.height, &mut self.tmp);
-            }
-            gradients(l0);
+            let tmp = &mut self.tmp;
+            simd(
+                #[inline(always)]
+                || {
+                    if presmooth {
+                        smooth_in_place(&mut l0.data, win.width, win.height, tmp);
+                    }
+                    gradients(l0);
+                },
+            );
         }
         let mut built = 1;
         for l in 1..levels {
@@ -187,8 +194,14 @@ impl Pyramid {
             child.y0 = cy0;
             child.width = cx1 + 1 - cx0;
             child.height = cy1 + 1 - cy0;
-            reduce(parent, child, &mut self.tmp);
-            gradients(child);
+            let tmp = &mut self.tmp;
+            simd(
+                #[inline(always)]
+                || {
+                    reduce(parent, child, tmp);
+                    gradients(child);
+                },
+            );
             built += 1;
         }
         self.n_levels = built;
@@ -220,24 +233,32 @@ impl Pyramid {
     }
 }
 
-#[inline]
+#[inline(always)]
 fn clampi(i: isize, n: usize) -> usize {
     i.clamp(0, n as isize - 1) as usize
 }
 
 /// Separable [1 4 6 4 1]/16 smoothing with clamped borders.
+#[inline(always)]
 fn smooth_in_place(data: &mut [f32], w: usize, h: usize, tmp: &mut Vec<f32>) {
     tmp.clear();
     tmp.resize(w * h, 0.0);
+    let k = KERNEL;
     for j in 0..h {
         let row = &data[j * w..(j + 1) * w];
         let out = &mut tmp[j * w..(j + 1) * w];
-        for (i, o) in out.iter_mut().enumerate() {
-            let mut s = 0.0;
-            for (k, &kv) in KERNEL.iter().enumerate() {
-                s += kv * row[clampi(i as isize + k as isize - 2, w)];
+        // Interior in five-tap windows (the same sums, in the same order, as the border's).
+        if w >= 5 {
+            for (o, v) in out[2..w - 2].iter_mut().zip(row.windows(5)) {
+                *o = k[0] * v[0] + k[1] * v[1] + k[2] * v[2] + k[3] * v[3] + k[4] * v[4];
             }
-            *o = s;
+        }
+        for i in (0..w.min(2)).chain(w.saturating_sub(2).max(w.min(2))..w) {
+            let mut s = 0.0;
+            for (t, &kv) in k.iter().enumerate() {
+                s += kv * row[clampi(i as isize + t as isize - 2, w)];
+            }
+            out[i] = s;
         }
     }
     for j in 0..h {
@@ -254,6 +275,7 @@ fn smooth_in_place(data: &mut [f32], w: usize, h: usize, tmp: &mut Vec<f32>) {
 }
 
 /// Filters `parent` with the binomial kernel at the child's sample positions only, then subsamples.
+#[inline(always)]
 fn reduce(parent: &Level, child: &mut Level, tmp: &mut Vec<f32>) {
     let (pw, ph) = (parent.width, parent.height);
     let (cw, ch) = (child.width, child.height);
@@ -262,15 +284,28 @@ fn reduce(parent: &Level, child: &mut Level, tmp: &mut Vec<f32>) {
     let off_y = 2 * child.y0 - parent.y0;
     tmp.clear();
     tmp.resize(ph * cw, 0.0);
+    let k = KERNEL;
+    // Child columns whose five taps all fall inside the parent row: i_lo..i_hi.
+    let i_lo = (2usize.saturating_sub(off_x)).div_ceil(2).min(cw);
+    let i_hi = if pw >= off_x + 3 {
+        ((pw - off_x - 3) / 2 + 1).clamp(i_lo, cw)
+    } else {
+        i_lo
+    };
     for j in 0..ph {
         let row = &parent.data[j * pw..(j + 1) * pw];
-        for i in 0..cw {
+        let out = &mut tmp[j * cw..(j + 1) * cw];
+        for (i, o) in out.iter_mut().enumerate().take(i_hi).skip(i_lo) {
+            let v = &row[off_x + 2 * i - 2..off_x + 2 * i + 3];
+            *o = k[0] * v[0] + k[1] * v[1] + k[2] * v[2] + k[3] * v[3] + k[4] * v[4];
+        }
+        for i in (0..i_lo).chain(i_hi..cw) {
             let c = (off_x + 2 * i) as isize;
             let mut s = 0.0;
-            for (k, &kv) in KERNEL.iter().enumerate() {
-                s += kv * row[clampi(c + k as isize - 2, pw)];
+            for (t, &kv) in k.iter().enumerate() {
+                s += kv * row[clampi(c + t as isize - 2, pw)];
             }
-            tmp[j * cw + i] = s;
+            out[i] = s;
         }
     }
     child.data.clear();
@@ -289,6 +324,7 @@ fn reduce(parent: &Level, child: &mut Level, tmp: &mut Vec<f32>) {
 }
 
 /// Central-difference gradients, one-sided on the window border.
+#[inline(always)]
 fn gradients(level: &mut Level) {
     let (w, h) = (level.width, level.height);
     level.gx.clear();
