@@ -1459,7 +1459,7 @@ impl Workspace {
         // Noise variance from the scale and the per-pixel variance gains; inlier fraction; u.
         let ka = if presmooth { KERNEL_A } else { 1.0 };
         let table: [f64; 65] = std::array::from_fn(|i| interp_gain(i as f64 / 64.0, presmooth));
-        self.u.clear();
+        // Every entry is written by `UVectors::spans` (zero where a pixel carries no noise).
         self.u.resize(self.idx.len(), [0.0; 8]);
         let (e1, e2) = moments;
         let ctx = UVectors {
@@ -2231,6 +2231,8 @@ impl UVectors<'_> {
             let x_first = (sp.i0 as f64 - o[0]) as f32;
             for k in sp.k0..sp.k0 + sp.len {
                 m_all += f64::from(self.m[k]);
+                let u = &mut u[k - kb];
+                *u = [0.0; 8];
                 if self.valid[k] == 0 {
                     continue;
                 }
@@ -2248,7 +2250,6 @@ impl UVectors<'_> {
                 let me = self.m[k] * self.e1;
                 let (gx, gy) = (self.gx[k] * me, self.gy[k] * me);
                 let x = x_first + (k - sp.k0) as f32;
-                let u = &mut u[k - kb];
                 match spec.model {
                     MotionModel::Translation => {
                         (u[0], u[1]) = (gx, gy);

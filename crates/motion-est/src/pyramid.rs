@@ -241,7 +241,7 @@ fn clampi(i: isize, n: usize) -> usize {
 /// Separable [1 4 6 4 1]/16 smoothing with clamped borders.
 #[inline(always)]
 fn smooth_in_place(data: &mut [f32], w: usize, h: usize, tmp: &mut Vec<f32>) {
-    tmp.clear();
+    // Every entry is written below: resize without clearing (no zero fill of reused memory).
     tmp.resize(w * h, 0.0);
     let k = KERNEL;
     for j in 0..h {
@@ -261,14 +261,26 @@ fn smooth_in_place(data: &mut [f32], w: usize, h: usize, tmp: &mut Vec<f32>) {
             out[i] = s;
         }
     }
-    for j in 0..h {
-        let rows: [usize; 5] = std::array::from_fn(|k| clampi(j as isize + k as isize - 2, h));
-        let out = &mut data[j * w..(j + 1) * w];
+    vertical(tmp, w, h, 0, 1, data);
+}
+
+/// The vertical pass of the clamped-border binomial filter over the `w`-wide rows of `src` (`h`
+/// rows), evaluated at rows `off + step·j` into the rows of `out`, as whole-row slices
+/// (vectorisable). The sum runs in the order of the kernel's taps, from zero.
+#[inline(always)]
+fn vertical(src: &[f32], w: usize, h: usize, off: usize, step: usize, out: &mut [f32]) {
+    let k = KERNEL;
+    for (j, out) in out.chunks_exact_mut(w).enumerate() {
+        let c = (off + step * j) as isize;
+        let row = |t: isize| &src[clampi(c + t, h) * w..][..w];
+        let (a, b, m, d, e) = (row(-2), row(-1), row(0), row(1), row(2));
         for (i, o) in out.iter_mut().enumerate() {
             let mut s = 0.0;
-            for (k, &kv) in KERNEL.iter().enumerate() {
-                s += kv * tmp[rows[k] * w + i];
-            }
+            s += k[0] * a[i];
+            s += k[1] * b[i];
+            s += k[2] * m[i];
+            s += k[3] * d[i];
+            s += k[4] * e[i];
             *o = s;
         }
     }
@@ -282,7 +294,7 @@ fn reduce(parent: &Level, child: &mut Level, tmp: &mut Vec<f32>) {
     // Parent-window column of child column i.
     let off_x = 2 * child.x0 - parent.x0;
     let off_y = 2 * child.y0 - parent.y0;
-    tmp.clear();
+    // Every entry is written below: resize without clearing.
     tmp.resize(ph * cw, 0.0);
     let k = KERNEL;
     // Child columns whose five taps all fall inside the parent row: i_lo..i_hi.
@@ -308,28 +320,20 @@ fn reduce(parent: &Level, child: &mut Level, tmp: &mut Vec<f32>) {
             out[i] = s;
         }
     }
-    child.data.clear();
     child.data.resize(cw * ch, 0.0);
-    for j in 0..ch {
-        let c = (off_y + 2 * j) as isize;
-        let rows: [usize; 5] = std::array::from_fn(|k| clampi(c + k as isize - 2, ph));
-        for i in 0..cw {
-            let mut s = 0.0;
-            for (k, &kv) in KERNEL.iter().enumerate() {
-                s += kv * tmp[rows[k] * cw + i];
-            }
-            child.data[j * cw + i] = s;
-        }
-    }
+    vertical(tmp, cw, ph, off_y, 2, &mut child.data);
 }
 
 /// Central-difference gradients, one-sided on the window border.
 #[inline(always)]
 fn gradients(level: &mut Level) {
     let (w, h) = (level.width, level.height);
-    level.gx.clear();
+    // Both are fully written below when the level is at least 2×2; otherwise they stay zero.
+    if w < 2 || h < 2 {
+        level.gx.clear();
+        level.gy.clear();
+    }
     level.gx.resize(w * h, 0.0);
-    level.gy.clear();
     level.gy.resize(w * h, 0.0);
     let d = &level.data;
     for j in 0..h {
@@ -351,8 +355,9 @@ fn gradients(level: &mut Level) {
             } else {
                 (j - 1, j + 1, 0.5)
             };
-            for i in 0..w {
-                gy[i] = half * (d[down * w + i] - d[up * w + i]);
+            let (up, down) = (&d[up * w..][..w], &d[down * w..][..w]);
+            for ((g, &dn), &u) in gy.iter_mut().zip(down).zip(up) {
+                *g = half * (dn - u);
             }
         }
     }
