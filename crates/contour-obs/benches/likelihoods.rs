@@ -8,66 +8,22 @@
 use std::hint::black_box;
 
 use contour_obs::{
-    Affine2, GreyView, LineSettings, OcclusionLikelihood, OdobezLikelihood, OdobezSettings,
-    Template, WuLikelihood, WuSettings,
+    GreyView, LineSettings, OcclusionLikelihood, OdobezLikelihood, OdobezSettings, Template,
+    WuLikelihood, WuSettings,
 };
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use rand::{Rng, SeedableRng};
-use rand_pcg::Pcg64Mcg;
 
-const W: usize = 320;
-const H: usize = 240;
-const N: usize = 200;
-
-/// A bright ellipse on a background of random discs (clutter), grey levels 0–255.
-fn frame(rng: &mut Pcg64Mcg) -> Vec<f32> {
-    let mut img = vec![100.0f32; W * H];
-    for _ in 0..400 {
-        let (cx, cy, r) = (
-            rng.random_range(0.0..W as f64),
-            rng.random_range(0.0..H as f64),
-            rng.random_range(2.0..8.0),
-        );
-        let g = rng.random_range(0.0..255.0) as f32;
-        for y in 0..H {
-            for x in 0..W {
-                if (x as f64 - cx).hypot(y as f64 - cy) <= r {
-                    img[y * W + x] = g;
-                }
-            }
-        }
-    }
-    for y in 0..H {
-        for x in 0..W {
-            let (u, v) = ((x as f64 - 160.0) / 40.0, (y as f64 - 120.0) / 28.0);
-            if u * u + v * v <= 1.0 {
-                img[y * W + x] = 230.0;
-            }
-        }
-    }
-    img
-}
+#[path = "../examples/common/frame.rs"]
+mod frame;
+use frame::{H, N, W, scene};
 
 fn bench(c: &mut Criterion) {
-    let mut rng = Pcg64Mcg::seed_from_u64(1);
-    let data = frame(&mut rng);
-    let image = match GreyView::new(W, H, &data) {
+    let s = scene();
+    let image = match GreyView::new(W, H, &s.data) {
         Ok(v) => v,
         Err(e) => panic!("bad frame: {e}"),
     };
-    let poses: Vec<Affine2> = (0..N)
-        .map(|_| {
-            Affine2::from_ellipse(
-                160.0 + rng.random_range(-8.0..8.0),
-                120.0 + rng.random_range(-8.0..8.0),
-                40.0 * rng.random_range(0.9..1.1),
-                28.0 * rng.random_range(0.9..1.1),
-                rng.random_range(-0.1..0.1),
-            )
-        })
-        .collect();
-    let lambdas: Vec<f64> = (0..N).map(|i| 0.01 + 0.001 * i as f64).collect();
-    let gammas: Vec<f64> = (0..N).map(|i| i as f64 / N as f64).collect();
+    let (poses, lambdas, gammas) = (s.poses, s.lambdas, s.gammas);
     let mut out = vec![0.0; N];
     let mut group = c.benchmark_group("log_likelihood_200_hypotheses");
     group.throughput(Throughput::Elements(N as u64));

@@ -504,7 +504,11 @@ impl MeasurementLines {
             return (self.length_of(0), 0);
         }
         let mask = self.scan.mask(line);
-        self.edges.extend(self.scan.offsets(line, window & mask));
+        // Pushed one by one: `extend` from the bit iterator (no size hint) stays an
+        // out-of-line generic loop, a call per line.
+        for z in self.scan.offsets(line, window & mask) {
+            self.edges.push(z);
+        }
         // All L + 1 offsets examined.
         (self.whole_length, mask.count_ones() as usize)
     }

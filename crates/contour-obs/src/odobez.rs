@@ -143,8 +143,13 @@ impl OdobezLikelihood {
         Ok((0..self.contour.len())
             .map(|i| {
                 let d2 = ws.nearest_planned(image, i, search);
-                // As odobez_line_log_term on the nearest edge.
-                (-d2 / (2.0 * sigma * sigma)).max(ln_k)
+                // As odobez_line_log_term on the nearest edge. Without one (d2 = +∞) that is
+                // max(−∞, ln K) = ln K: the division is skipped.
+                if d2 == f64::INFINITY {
+                    ln_k
+                } else {
+                    (-d2 / (2.0 * sigma * sigma)).max(ln_k)
+                }
             })
             .sum())
     }

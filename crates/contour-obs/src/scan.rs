@@ -353,15 +353,27 @@ fn cells(
 
 /// The 2×2 cells' pixel pairs at `cell[i]`: the only scalar pass (two 8-byte reads and writes
 /// per sample). Kept out of line so that its loop gets the registers to itself.
+///
+/// One bounds check for the whole pass instead of one per sample: every cell is clamped (a
+/// conditional move, never taken for the cells of [`LineScan::place`], which all lie in the
+/// image) to the largest one, `last`, and the pixels are read from `data[..last + width + 2]`,
+/// so the compiler can prove every read in bounds (indices and width below 2³², no overflow).
 #[inline(never)]
 fn gather(data: &[f32], width: usize, cell: &[i32], top: &mut [f32], bottom: &mut [f32]) {
     let n = cell.len();
     let (top, bottom) = (&mut top[..2 * n], &mut bottom[..2 * n]);
+    let (Ok(w), Ok(len)) = (u32::try_from(width), u32::try_from(data.len())) else {
+        return;
+    };
+    let Some(last) = len.checked_sub(w.saturating_add(2)) else {
+        return;
+    };
+    let (w, last) = (w as usize, last as usize);
+    let data = &data[..last + w + 2];
     let quad = |c: i32| {
-        let i = c as usize;
-        // One bounds check for the 2×2 cell.
-        let quad = &data[i..i + width + 2];
-        ([quad[0], quad[1]], [quad[width], quad[width + 1]])
+        let i = (c as u32 as usize).min(last);
+        let quad = &data[i..i + w + 2];
+        ([quad[0], quad[1]], [quad[w], quad[w + 1]])
     };
     // Two samples per iteration.
     let (pairs, rest) = cell.as_chunks::<2>();
