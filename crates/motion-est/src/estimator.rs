@@ -2224,7 +2224,8 @@ impl UVectors<'_> {
         let (spec, s, c, o) = (self.spec, self.s, self.c, self.o);
         let ng = spec.model.geometric_len();
         let ka = self.ka;
-        let q = |f: f64| self.table[((f * 64.0 + 0.5) as usize).min(64)];
+        // f ∈ [0, 1): the 32-bit conversion is shorter than the saturating one to usize.
+        let q = |f: f64| self.table[((f * 64.0 + 0.5) as i32).clamp(0, 64) as usize];
         let (mut gain, mut n_in, mut m_in, mut m_all) = (0.0f64, 0usize, 0.0f64, 0.0f64);
         for sp in spans {
             let y = (sp.j as f64 - o[1]) as f32;
@@ -2288,8 +2289,10 @@ impl Sample {
         if !(qx >= 0.0 && qy >= 0.0 && qx <= xmax && qy <= ymax) {
             return None;
         }
-        let ix = (qx as usize).min(w1 - 2);
-        let iy = (qy as usize).min(h1 - 2);
+        // In range (checked above, and images are far smaller than 2³¹ pixels): the 32-bit
+        // conversion is a few instructions shorter than the saturating one to usize.
+        let ix = (qx as i32 as usize).min(w1 - 2);
+        let iy = (qy as i32 as usize).min(h1 - 2);
         Some(Self {
             ix,
             iy,
