@@ -9,12 +9,15 @@
 //! occlusion-aware proposal), WS0 (no warm start), DEFSET (accurate motion settings), RATIO=1
 //! (the ratio form of Wu's likelihood, `LikelihoodSettings::likelihood_ratio`), ARC=1/0 and NEUTRAL=1/0
 //! (`LikelihoodSettings::occlusion_arc`, `neutral_hidden_lines`), LGR (κ of γ | locked,
-//! `DynamicsSettings::locked_gamma_rate`), LOCKLO, LOCKHI, PARTLO, PARTHI (the status HMM's γ
+//! `DynamicsSettings::locked_gamma_rate`), SREV (`DynamicsSettings::shape_reversion`), LOCKLO, LOCKHI, PARTLO, PARTHI (the status HMM's γ
 //! ranges), TLP (its locked → partially occluded probability), V (per-seed
 //! lines), REACQ=1/0 (reacquisition jump on/off, `TrackerConfig::reacquisition`) with RQLOCK,
 //! RQRATE, RQMAX, RQSPREAD, RQGROW, RQPG, RQVG, RQSG, RQBACK, RQSHAPE (its settings). Diagnostics: TRACE (one line per frame), LAND=k (likelihood landscape at frame k),
 //! DUMP=k (frame k as a binary PGM on stdout). Besides the IoU it prints β̂ accuracy, γ̂ MAE and α̂
-//! accuracy against the generator's truth (frame 0 left out, as `track eval switching`).
+//! accuracy against the generator's truth (frame 0 left out, as `track eval switching`), and on a
+//! scene where the target is hidden, the same split by phase of the occlusion (free before,
+//! partly hidden going in, hidden, partly hidden coming out, free after; "share of γ̂ MAE" is
+//! the phase's part of the overall γ̂ MAE), to see which phase the errors come from.
 
 use contour_obs::Ellipse;
 use scene_synth::{Scenario, ScenarioParams, Scene};
@@ -69,6 +72,31 @@ fn main() {
         Some(last) => (last..vis.len()).filter(|&k| vis[k] > 0.8).collect(),
         None => Vec::new(),
     };
+    // The phase of each frame: 0 free before the occlusion, 1 partly hidden going in, 2 hidden
+    // (visible ≤ 1 %), 3 partly hidden coming out, 4 free after; None without an occlusion.
+    let hidden_at = vis.iter().position(|&v| v <= 0.01);
+    let phase = |k: usize| -> Option<usize> {
+        let h = hidden_at?;
+        Some(match vis[k] {
+            v if v >= 0.99 => {
+                if k < h {
+                    0
+                } else {
+                    4
+                }
+            }
+            v if v <= 0.01 => 2,
+            _ => {
+                if k < h {
+                    1
+                } else {
+                    3
+                }
+            }
+        })
+    };
+    // Per phase: frames, β̂ right, γ̂ absolute error, α̂ right, IoU.
+    let mut phases = [[0.0; 5]; 5];
     for seed in 1..=seeds {
         let mut c = preset.config(n, seed);
         if let Some(v) = env("RHO") {
@@ -82,6 +110,9 @@ fn main() {
         }
         if let Some(v) = env("ST") {
             c.dynamics.sigma_translation = v;
+        }
+        if let Some(v) = env("SREV") {
+            c.dynamics.shape_reversion = v;
         }
         if let Some(v) = env("LGR") {
             c.dynamics.locked_gamma_rate = v;
@@ -204,22 +235,6 @@ fn main() {
                 t.update(f).unwrap()
             };
             ms += est.millis;
-            if k > 0 {
-                nh += 1.0;
-                gerr += (est.gamma.unwrap_or(0.0) - (1.0 - truth.visible_fraction)).abs();
-                let ta = match truth.status {
-                    scene_synth::Status::Locked => 0,
-                    scene_synth::Status::Partial => 1,
-                    scene_synth::Status::Lost => 2,
-                };
-                aok += f64::from(u8::from(
-                    est.status.as_ref().map(|s| s.alpha_hat.index()) == Some(ta),
-                ));
-                bok += f64::from(u8::from(
-                    est.clutter.as_ref().map(|c| c.beta_hat + 1)
-                        == Some(truth.clutter_class.into()),
-                ));
-            }
             let b = est.bbox;
             let g = truth.bbox;
             let ix = (b[0] + b[2]).min(g.x + g.w) - b[0].max(g.x);
@@ -227,6 +242,30 @@ fn main() {
             let inter = ix.max(0.0) * iy.max(0.0);
             let iou = inter / (b[2] * b[3] + g.w * g.h - inter);
             ious.push(iou);
+            if k > 0 {
+                nh += 1.0;
+                let g_err = (est.gamma.unwrap_or(0.0) - (1.0 - truth.visible_fraction)).abs();
+                gerr += g_err;
+                let ta = match truth.status {
+                    scene_synth::Status::Locked => 0,
+                    scene_synth::Status::Partial => 1,
+                    scene_synth::Status::Lost => 2,
+                };
+                let a_ok = f64::from(u8::from(
+                    est.status.as_ref().map(|s| s.alpha_hat.index()) == Some(ta),
+                ));
+                aok += a_ok;
+                let b_ok = f64::from(u8::from(
+                    est.clutter.as_ref().map(|c| c.beta_hat + 1)
+                        == Some(truth.clutter_class.into()),
+                ));
+                bok += b_ok;
+                if let Some(ph) = phase(k) {
+                    for (slot, v) in phases[ph].iter_mut().zip([1.0, b_ok, g_err, a_ok, iou]) {
+                        *slot += v;
+                    }
+                }
+            }
             if std::env::var("TRACE").is_ok() {
                 println!(
                     "{k:3} ab ({:4.1},{:4.1}) truth ({:6.1},{:6.1}) vis {:.2} est ({:6.1},{:6.1}) iou {iou:.2} γ {:.2} α {:?} β {:?} (true {}) ess {:.0}",
@@ -281,6 +320,30 @@ fn main() {
         hidden[1] / seeds as f64,
         hidden[2] / seeds as f64
     );
+    let frames_scored: f64 = phases.iter().map(|p| p[0]).sum();
+    if frames_scored > 0.0 {
+        println!("  phase           frames  β̂      γ̂ MAE  share of γ̂ MAE  α̂      IoU");
+        let names = [
+            "free before",
+            "partly in",
+            "hidden",
+            "partly out",
+            "free after",
+        ];
+        for (name, p) in names.iter().zip(&phases) {
+            if p[0] > 0.0 {
+                println!(
+                    "  {name:<14} {:7} {:6.3} {:6.3} {:15.3} {:6.3} {:6.3}",
+                    p[0],
+                    p[1] / p[0],
+                    p[2] / p[0],
+                    p[2] / frames_scored,
+                    p[3] / p[0],
+                    p[4] / p[0]
+                );
+            }
+        }
+    }
 }
 
 /// Prints Wu's log-likelihood (λ = medium, line fraction 0.5) of the true contour shifted

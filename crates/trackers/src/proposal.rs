@@ -65,7 +65,10 @@ impl ClusterMotion {
         mean_prev: &StateVector,
     ) -> Self {
         let space = dynamics.space;
-        let pred = dynamics.settings.predict(space, mean_now, mean_prev);
+        let pred =
+            dynamics
+                .settings
+                .predict(space, mean_now, mean_prev, dynamics.shape_anchor.as_ref());
         let mut derivative = [0.0; STATE_SLOTS];
         for j in 0..space.dim() {
             derivative[j] = pred[j] - mean_now[j];
@@ -329,6 +332,7 @@ mod tests {
             occlusion: OcclusionModel::None,
             bounds: crate::space::ShapeBounds::loose(2.0),
             reacquisition: None,
+            shape_anchor: None,
         };
         let mut cov = Matrix6::zeros();
         cov[(0, 0)] = 0.5;

@@ -141,6 +141,11 @@ impl TrackMemory {
         }
     }
 
+    /// The remembered state (translation as of the last locked frame).
+    pub fn state(&self) -> &StateVector {
+        &self.state
+    }
+
     /// The last locked frame.
     pub fn last_locked(&self) -> usize {
         self.frame

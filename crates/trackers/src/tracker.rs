@@ -158,6 +158,7 @@ impl ParticleTracker {
                 occlusion,
                 bounds: ShapeBounds::loose(config.dynamics.min_scale),
                 reacquisition: None,
+                shape_anchor: None,
             },
             likelihood: LikelihoodModel::new(config.space, &config.likelihood)?,
             filter: ParticleFilter::new(config.filter.clone())?,
@@ -517,6 +518,10 @@ impl Tracker for ParticleTracker {
             return Err(Error::NotInitialised);
         };
         self.dynamics.reacquisition = self.reacquisition_component(self.frame + 1);
+        // The mean shape of the shape-space dynamics: the shape remembered over the locked
+        // estimates (see `DynamicsSettings::shape_reversion`).
+        self.dynamics.shape_anchor =
+            (self.config.dynamics.shape_reversion > 0.0).then(|| *self.memory.state());
         let current = frame.grey_view();
         let previous = contour_obs::GreyView::new(self.size.0, self.size.1, &self.previous)?;
         self.likelihood
