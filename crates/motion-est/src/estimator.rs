@@ -1433,11 +1433,25 @@ impl Workspace {
         // One pass gives the sensitivity and the same-pixel term Σ m² J Jᵀ over the pixels a
         // redescending ρ does not reject (those carry no noise into Θ̂).
         let rej2 = robust.rejection().map(|r| (r * r) as f32);
-        let (diag, _, hs) = self.accumulate(spec, s, o, true, move |z: f32, m: f32| {
+        let same_pixel = move |z: f32, m: f32| -> f32 {
             let keep = rej2.is_none_or(|r2| z * z < r2);
-            let w = if keep { m * m } else { 0.0 };
-            (w, m * robust.psi_prime(f64::from(z)) as f32)
-        });
+            if keep { m * m } else { 0.0 }
+        };
+        let (diag, _, hs) = match robust {
+            // Tukey's ψ' = (1 − u)(1 − 5u) for u = z²/c² < 1, else 0, in f32 and branch-free as
+            // in `normal_equations`, so that the lanes vectorise.
+            RobustFunction::Tukey { c } => {
+                let ic2 = (1.0 / (c * c)) as f32;
+                self.accumulate(spec, s, o, true, move |z: f32, m: f32| {
+                    let u = z * z * ic2;
+                    let t = (1.0 - u).max(0.0);
+                    (same_pixel(z, m), m * t * (1.0 - 5.0 * u))
+                })
+            }
+            r => self.accumulate(spec, s, o, true, move |z: f32, m: f32| {
+                (same_pixel(z, m), m * r.psi_prime(f64::from(z)) as f32)
+            }),
+        };
         let mut hpad = hs;
         for i in n..7 {
             hpad[(i, i)] = 1.0;
