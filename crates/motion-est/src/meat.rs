@@ -95,14 +95,6 @@ impl Grid<'_> {
             if last <= lr0 || first >= lr1 {
                 continue;
             }
-            // Second frame: the 4×4 taps of consecutive pixels overlap (the sample position
-            // moves by about one column per pixel), so they are summed in a window of 4×4 cells
-            // held in registers; a window column is added to the grid once no later pixel of the
-            // run can reach it. This replaces 16 read-modify-writes of the grid per pixel, each
-            // waiting on the previous pixel's store, by about 4.
-            let mut win = [[[0.0f32; 8]; 4]; 4];
-            // Grid row of the window's first tap row and grid column of its first column.
-            let mut at: Option<(usize, usize)> = None;
             for k in sp.k0..sp.k0 + sp.len {
                 if self.valid[k] == 0 {
                     continue;
@@ -128,36 +120,19 @@ impl Grid<'_> {
                     ([0.0, 1.0 - fx, fx, 0.0], [0.0, 1.0 - fy, fy, 0.0])
                 };
                 let x0 = (x as isize - 1 - self.ox) as usize;
-                match at {
-                    Some((g0, c0)) if g0 == gy && c0 == x0 => {}
-                    Some((g0, c0)) if g0 == gy && c0 + 1 == x0 => {
-                        for (r, row) in win.iter_mut().enumerate() {
-                            add_cell(cells, bw, lr0, lr1, g0 + r, c0, &row[0]);
-                            row.rotate_left(1);
-                            row[3] = [0.0; 8];
-                        }
-                        at = Some((gy, x0));
+                for (r, &wyr) in wy.iter().enumerate() {
+                    let g = gy + r;
+                    if g < lr0 || g >= lr1 {
+                        continue;
                     }
-                    Some((g0, c0)) => {
-                        flush_window(cells, bw, lr0, lr1, g0, c0, &mut win);
-                        at = Some((gy, x0));
-                    }
-                    None => at = Some((gy, x0)),
-                }
-                for (row, &wyr) in win.iter_mut().zip(&wy) {
-                    let mut su = [0.0f32; 8];
-                    for l in 0..8 {
-                        su[l] = wyr * u[l];
-                    }
-                    for (cell, &wxc) in row.iter_mut().zip(&wx) {
-                        for l in 0..8 {
-                            cell[l] += su[l] * wxc;
+                    let su: Cell = std::array::from_fn(|c| wyr * u[c]);
+                    let start = (g - lr0) * bw + x0;
+                    for (cell, &wxc) in cells[start..start + 4].iter_mut().zip(&wx) {
+                        for (v, &s) in cell.iter_mut().zip(&su) {
+                            *v += s * wxc;
                         }
                     }
                 }
-            }
-            if let Some((g0, c0)) = at {
-                flush_window(cells, bw, lr0, lr1, g0, c0, &mut win);
             }
         }
     }
@@ -220,37 +195,6 @@ impl Grid<'_> {
             outer_sum::<N>(row, &mut total);
         }
         symmetric(&total)
-    }
-}
-
-/// Adds `v` to the cell at grid row `g`, column `c`, when the row lies in the band's local rows
-/// `lr0..lr1` (the grid `cells` starts at row `lr0`).
-#[inline(always)]
-fn add_cell(cells: &mut [Cell], bw: usize, lr0: usize, lr1: usize, g: usize, c: usize, v: &Cell) {
-    if g >= lr0 && g < lr1 {
-        let cell = &mut cells[(g - lr0) * bw + c];
-        for l in 0..8 {
-            cell[l] += v[l];
-        }
-    }
-}
-
-/// Adds the whole 4×4 window whose first cell is at grid row `g0`, column `c0`, and clears it.
-#[inline(always)]
-fn flush_window(
-    cells: &mut [Cell],
-    bw: usize,
-    lr0: usize,
-    lr1: usize,
-    g0: usize,
-    c0: usize,
-    win: &mut [[Cell; 4]; 4],
-) {
-    for (r, row) in win.iter_mut().enumerate() {
-        for (c, v) in row.iter_mut().enumerate() {
-            add_cell(cells, bw, lr0, lr1, g0 + r, c0 + c, v);
-            *v = [0.0; 8];
-        }
     }
 }
 
