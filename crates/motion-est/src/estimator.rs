@@ -26,11 +26,12 @@
 use nalgebra::{Matrix2, Matrix6, SMatrix, SVector};
 
 use crate::image::ImageView;
-use crate::meat::{Cell, Grid, cubic_weights, simd};
+use crate::meat::{Cell, Grid, cubic_weights};
 use crate::model::{ModelSpec, MotionModel};
 use crate::pyramid::{Level, Pyramid, Window};
 use crate::region::{PixelBox, Region};
 use crate::robust::{RobustFunction, robust_scale_from};
+use crate::simd::simd;
 use crate::{Error, Result};
 
 type Mat7 = SMatrix<f64, 7, 7>;

@@ -51,6 +51,7 @@ pub mod patch;
 pub mod pyramid;
 pub mod region;
 pub mod robust;
+mod simd;
 
 pub use error::{Error, Result};
 pub use estimator::{FrameBuffers, MotionEstimate, MotionEstimator, Settings, Workspace};

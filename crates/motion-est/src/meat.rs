@@ -7,7 +7,7 @@
 //! step works on whole cells: a pixel's scatter is 16 cell updates, the separable convolution is
 //! five cell products per pass, and the outer product of a cell is one broadcast product per
 //! parameter. The loops are written on `[f32; 8]` and compiled for the best instruction set
-//! available at run time ([`simd`]); the arithmetic (separate products and sums, fixed order) is
+//! available at run time ([`crate::simd::simd`]); the arithmetic (separate products and sums, fixed order) is
 //! the same on every instruction set, so the result does not depend on the machine's.
 
 use nalgebra::SMatrix;
@@ -18,14 +18,6 @@ use crate::pyramid::{KERNEL, Level};
 pub(crate) type Cell = [f32; 8];
 
 type Mat7 = SMatrix<f64, 7, 7>;
-
-/// Runs `f` compiled for the best instruction set of this CPU (AVX-512, AVX2 or the baseline),
-/// through pulp's run-time dispatch. `f` and what it calls must be inlined into it (mark them
-/// `#[inline(always)]`) to benefit.
-#[inline(always)]
-pub(crate) fn simd<R>(f: impl FnOnce() -> R) -> R {
-    pulp::Arch::new().dispatch(f)
-}
 
 /// The grid of one frame: `bw`×`bh` cells with origin (`ox`, `oy`) in the level, onto which the
 /// per-pixel vectors `u` are scattered at `pos` (through the interpolation taps at fractions

@@ -6,7 +6,7 @@
 //! which equals clamping to the image where the window touches the image border.
 
 use crate::image::ImageView;
-use crate::meat::simd;
+use crate::simd::simd;
 use crate::{Error, Result};
 
 /// The 1-D binomial kernel [1 4 6 4 1]/16 used for pre-smoothing and reduction.
