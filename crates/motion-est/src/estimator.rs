@@ -1757,6 +1757,44 @@ mod tests {
     }
 
     #[test]
+    fn every_instruction_set_gives_the_same_bits() {
+        // The dispatched hot loops (this CPU's best instruction set) against the baseline build of
+        // the same loops, on a region small enough to stay on this thread: parameters,
+        // covariance, scale and inlier fraction bit for bit, with the offset and the tracking
+        // preset's first-order path too.
+        let origin = [60.0, 50.0];
+        let (f0, f1) = pair([0.8, 0.01, -0.01, 0.5, 0.015, -0.005], origin, 3.0);
+        let (v0, v1) = views(&f0, &f1);
+        let region = Region::Ellipse(Ellipse {
+            cx: 60.0,
+            cy: 50.0,
+            a: 30.0,
+            b: 20.0,
+            theta: 0.4,
+        });
+        for settings in [Settings::default(), Settings::tracking()] {
+            let est = MotionEstimator::new(settings).unwrap();
+            let spec = ModelSpec::new(MotionModel::Affine, true);
+            let run = || {
+                est.estimate_images(v0, v1, &region, spec, Some(origin))
+                    .unwrap()
+            };
+            let best = run();
+            let (base, dispatches) = crate::simd::tests::on_baseline(run);
+            // Pyramids, evaluations, normal equations, scale, covariance: dozens of loops.
+            assert!(dispatches > 20, "{dispatches}");
+            let bits = |r: &MotionEstimate| {
+                let mut v: Vec<u64> = r.params.iter().map(|x| x.to_bits()).collect();
+                v.extend(r.covariance.iter().map(|x| x.to_bits()));
+                v.extend([r.scale.to_bits(), r.inlier_fraction.to_bits()]);
+                v
+            };
+            assert_eq!(bits(&best), bits(&base));
+            assert!(best.converged);
+        }
+    }
+
+    #[test]
     fn ellipse_and_equivalent_mask_give_the_same_estimate() {
         let origin = [60.0, 50.0];
         let (f0, f1) = pair([0.8, 0.01, -0.01, 0.5, 0.015, -0.005], origin, 0.0);
