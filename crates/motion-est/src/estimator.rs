@@ -595,7 +595,6 @@ impl MotionEstimator {
             for &active in phases {
                 level_converged = false;
                 let mut prev_step = f64::INFINITY;
-                let (mut min_step, mut stalls) = (f64::INFINITY, 0);
                 for _ in 0..st.max_iterations {
                     iterations[l] += 1;
                     let n_valid = ws.evaluate(l0, l1, spec, &theta, o, l == 0);
@@ -632,18 +631,6 @@ impl MotionEstimator {
                     if step < tol || converging_below(step, prev_step, tol) {
                         level_converged = true;
                         break;
-                    }
-                    // A coarse level whose steps stop reaching new minima is in a limit cycle
-                    // (bilinear samples of a few hundred pixels, re-weighted residuals): its
-                    // fixed point is no sharper than the cycle, which the next finer level
-                    // corrects; iterating to `max_iterations` gains nothing.
-                    if step < min_step {
-                        min_step = step;
-                    } else {
-                        stalls += 1;
-                        if l > 0 && stalls >= STALLS {
-                            break;
-                        }
                     }
                     prev_step = step;
                 }
@@ -790,10 +777,6 @@ impl<'r, 'a> RowTest<'r, 'a> {
         }
     }
 }
-
-/// Iterations without a new smallest step after which a coarse level stops (see
-/// `MotionEstimator::estimate_from_here`).
-const STALLS: usize = 3;
 
 /// Whether IRLS, which converges linearly, will take its next step below `tol`: the step shrank
 /// from `prev` to `step`, the next one is predicted at step · (step / prev), and that must be below
