@@ -88,16 +88,7 @@ impl LineScan {
     ) -> bool {
         self.lines = 0;
         self.masks.clear();
-        self.valid.clear();
-        for v in [
-            &mut self.base,
-            &mut self.x,
-            &mut self.y,
-            &mut self.sx,
-            &mut self.sy,
-        ] {
-            v.clear();
-        }
+        self.reset_lanes(0);
         let r = det.radius();
         let Ok(candidates) = usize::try_from(khi - klo + 1) else {
             return false;
@@ -118,6 +109,23 @@ impl LineScan {
             self.flag.resize(len, 0);
         }
         true
+    }
+
+    /// The per-line set-up (cell bases, fixed-point positions and steps, validity) for `lanes`
+    /// lanes, all zero (invalid).
+    fn reset_lanes(&mut self, lanes: usize) {
+        for v in [
+            &mut self.base,
+            &mut self.x,
+            &mut self.y,
+            &mut self.sx,
+            &mut self.sy,
+        ] {
+            v.clear();
+            v.resize(lanes, 0);
+        }
+        self.valid.clear();
+        self.valid.resize(lanes, false);
     }
 
     /// Places line l = c + k·n for every (c, n) of `lines` (n = (NaN, NaN): undefined) at lane
@@ -155,18 +163,7 @@ impl LineScan {
         let limit_x = (width - 1) << FIX_BITS;
         let limit_y = (height - 1) << FIX_BITS;
         let clear = |p: i64, limit: i64| (p >= 0) & (p < limit);
-        for v in [
-            &mut self.base,
-            &mut self.x,
-            &mut self.y,
-            &mut self.sx,
-            &mut self.sy,
-        ] {
-            v.clear();
-            v.resize(lanes, 0);
-        }
-        self.valid.clear();
-        self.valid.resize(lanes, false);
+        self.reset_lanes(lanes);
         let (base, x, y) = (&mut self.base[..n], &mut self.x[..n], &mut self.y[..n]);
         let (sx, sy, valid) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.valid[..n]);
         let lines = &lines[..n];
@@ -358,6 +355,7 @@ fn cells(
 /// conditional move, never taken for the cells of [`LineScan::place`], which all lie in the
 /// image) to the largest one, `last`, and the pixels are read from `data[..last + width + 2]`,
 /// so the compiler can prove every read in bounds (indices and width below 2³², no overflow).
+/// An image of a single row has no 2×2 cell: no line of it is scanned, and nothing is read.
 #[inline(never)]
 fn gather(data: &[f32], width: usize, cell: &[i32], top: &mut [f32], bottom: &mut [f32]) {
     let n = cell.len();

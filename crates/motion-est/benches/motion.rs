@@ -6,13 +6,13 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use motion_est::{
-    Ellipse, FrameBuffers, ImageView, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region,
-    Settings, Workspace,
+    FrameBuffers, ImageView, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Settings,
+    Workspace,
 };
 
 #[path = "../examples/common/pair.rs"]
 mod pair;
-use pair::{H, W, pair};
+use pair::{H, TRACK_CENTRE, W, WARM_GUESS, pair, tracking_ellipse};
 
 fn region(size: usize) -> Region<'static> {
     if size >= W {
@@ -110,16 +110,9 @@ fn bench(c: &mut Criterion) {
     }
     g.finish();
 
-    // The tracker's use: an ellipse of semi-axes 22×28 px (an object of ~44×56 px) on shared
-    // full-frame pyramids, affine, centred on the frame centre.
+    // The tracker's use (`pair::tracking_ellipse`) on shared full-frame pyramids, affine.
     let mut g = c.benchmark_group("tracking_ellipse_22x28");
-    let ell = Region::Ellipse(Ellipse {
-        cx: 159.5,
-        cy: 119.5,
-        a: 22.0,
-        b: 28.0,
-        theta: 0.0,
-    });
+    let ell = tracking_ellipse();
     g.throughput(Throughput::Elements(1935));
     g.bench_function(BenchmarkId::new("affine", "default"), |b| {
         b.iter(|| {
@@ -128,7 +121,7 @@ fn bench(c: &mut Criterion) {
                 &p1,
                 black_box(&ell),
                 ModelSpec::new(MotionModel::Affine, false),
-                Some([159.5, 119.5]),
+                Some(TRACK_CENTRE),
                 &mut ws,
             )
             .unwrap()
@@ -143,14 +136,12 @@ fn bench(c: &mut Criterion) {
                     &p1,
                     black_box(&ell),
                     ModelSpec::new(MotionModel::Affine, false),
-                    Some([159.5, 119.5]),
+                    Some(TRACK_CENTRE),
                     &mut ws,
                 )
                 .unwrap()
         })
     });
-    // Warm start from a prediction 0.5 px off the true motion (3, −2) + 3 % zoom.
-    let guess = [2.5, 0.03, 0.0, -1.6, 0.0, 0.03];
     g.bench_function(BenchmarkId::new("affine", "tracking_warm"), |b| {
         b.iter(|| {
             est_t
@@ -159,8 +150,8 @@ fn bench(c: &mut Criterion) {
                     &p1,
                     black_box(&ell),
                     ModelSpec::new(MotionModel::Affine, false),
-                    Some([159.5, 119.5]),
-                    Some(&guess),
+                    Some(TRACK_CENTRE),
+                    Some(&WARM_GUESS),
                     &mut ws,
                 )
                 .unwrap()

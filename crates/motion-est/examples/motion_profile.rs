@@ -8,13 +8,13 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use motion_est::{
-    Ellipse, FrameBuffers, ImageView, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region,
-    Settings, Workspace,
+    FrameBuffers, ImageView, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Settings,
+    Workspace,
 };
 
 #[path = "common/pair.rs"]
 mod pair;
-use pair::{H, W, pair};
+use pair::{H, TRACK_CENTRE, W, WARM_GUESS, pair, tracking_ellipse};
 
 /// Runs `f` `n` times in 20 batches; the minimum and median batch means (ms): the minimum is
 /// the figure least affected by other processes on a shared machine.
@@ -74,17 +74,10 @@ fn main() {
             est.build_pyramid_into(v0, &mut p0).unwrap();
             est.build_pyramid_into(v1, &mut p1).unwrap();
             let mut ws = Workspace::new();
-            let ell = Region::Ellipse(Ellipse {
-                cx: 159.5,
-                cy: 119.5,
-                a: 22.0,
-                b: 28.0,
-                theta: 0.0,
-            });
-            let guess = [2.5, 0.03, 0.0, -1.6, 0.0, 0.03];
-            let initial = (case == "warm").then_some(&guess[..]);
+            let ell = tracking_ellipse();
+            let initial = (case == "warm").then_some(&WARM_GUESS[..]);
             let mut run = || {
-                est.estimate_from(&p0, &p1, &ell, spec, Some([159.5, 119.5]), initial, &mut ws)
+                est.estimate_from(&p0, &p1, &ell, spec, Some(TRACK_CENTRE), initial, &mut ws)
                     .unwrap()
             };
             let t = Instant::now();

@@ -23,10 +23,12 @@
 //! Ignoring the smoothing (treating the DFD as white) and the robust weights is what makes the
 //! original implementation under-report the error about 2.4×.
 
+use std::ops::Range;
+
 use nalgebra::{Matrix2, Matrix6, SMatrix, SVector};
 
 use crate::image::ImageView;
-use crate::meat::{Cell, Grid, cubic_weights};
+use crate::meat::{Cell, Grid};
 use crate::model::{ModelSpec, MotionModel};
 use crate::pyramid::{Level, Pyramid, Window};
 use crate::region::{PixelBox, Region};
@@ -34,7 +36,7 @@ use crate::robust::{RobustFunction, robust_scale_from};
 use crate::simd::simd;
 use crate::{Error, Result};
 
-type Mat7 = SMatrix<f64, 7, 7>;
+pub(crate) type Mat7 = SMatrix<f64, 7, 7>;
 type Vec7 = SVector<f64, 7>;
 
 /// Settings of the estimator.
@@ -933,6 +935,19 @@ fn bilinear(d: &[f32], i00: usize, w: usize, fx: f32, fy: f32) -> f32 {
     let top = d[i00] + fx * (d[i00 + 1] - d[i00]);
     let bot = d[i00 + w] + fx * (d[i00 + w + 1] - d[i00 + w]);
     top + fy * (bot - top)
+}
+
+/// Keys' cubic convolution weights (a = −0.5) of the taps −1, 0, 1, 2 at fraction `f`.
+#[inline(always)]
+pub(crate) fn cubic_weights(f: f32) -> [f32; 4] {
+    let f2 = f * f;
+    let f3 = f2 * f;
+    [
+        -0.5 * f3 + f2 - 0.5 * f,
+        1.5 * f3 - 2.5 * f2 + 1.0,
+        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
+        0.5 * f3 - 0.5 * f2,
+    ]
 }
 
 #[inline(always)]
@@ -2123,129 +2138,151 @@ struct Warp<'l> {
 impl Warp<'_> {
     /// `evaluate` over `spans`, whose pixels start at entry `kb` (where `out` starts); `idx` is
     /// the whole pixel list. Returns the number of valid samples.
+    ///
+    /// Full resolution: the sample loop computes only the residual and where it was taken; the
+    /// Jacobian's gradients (the first frame's, mapped through (I + D)^−T) are read from
+    /// contiguous rows in a second, vectorisable loop. Coarse levels: bilinear values and
+    /// second-frame gradients in the sample loop, then the first frame's mapped gradients
+    /// averaged in the same way; the sample positions are not stored (only the full-resolution
+    /// covariance reads them). A span's pixels are consecutive in the first frame's level, so
+    /// its rows there are plain slices.
     #[inline(always)]
-    fn spans(&self, spans: &[Span], idx: &[u32], kb: usize, out: Samples<'_>) -> usize {
-        let [cx, cy] = self.c;
-        let [bx1, bx2, by1, by2] = self.b;
-        let [t11, t12, t21, t22] = self.t;
-        let c = self.offset;
-        let (l0, l1) = (self.l0, self.l1);
-        let (w1, h1) = (l1.width, l1.height);
-        let (xmax, ymax) = ((w1 - 1) as f64, (h1 - 1) as f64);
-        let (d1, d0) = (&l1.data[..], &l0.data[..]);
+    fn spans(&self, spans: &[Span], idx: &[u32], kb: usize, mut out: Samples<'_>) -> usize {
         let mut n_valid = 0;
-        if self.full_res {
-            // Full resolution: the sample loop computes only the residual and where it was taken;
-            // the Jacobian's gradients (the first frame's, mapped through (I + D)^−T) are read from
-            // contiguous rows in a second, vectorisable loop. A span's pixels are consecutive in
-            // the first frame's level, so its rows there are plain slices.
-            for sp in spans {
-                let y = sp.j as f64;
-                let (qx0, qy0) = (cx + bx2 * y, cy + by2 * y);
-                let r = sp.k0 - kb..sp.k0 - kb + sp.len;
-                let first = idx[sp.k0] as usize;
-                let z0 = &d0[first..first + sp.len];
-                // Pass 1: where each sample falls (kept: the covariance reads it), and which taps
-                // it uses: `valid` is 2 for the bicubic interior, 1 for the bilinear border.
-                let pos = out.fx[r.clone()]
-                    .iter_mut()
-                    .zip(&mut out.fy[r.clone()])
-                    .zip(&mut out.qi[r.clone()])
-                    .zip(&mut out.valid[r.clone()]);
-                for (t, (((fxo, fyo), qio), valid)) in pos.enumerate() {
-                    let x = (sp.i0 + t) as f64;
-                    *valid = match Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1) {
-                        Some(Sample {
-                            ix,
-                            iy,
-                            fx,
-                            fy,
-                            i00,
-                        }) => {
-                            (*fxo, *fyo, *qio) = (fx, fy, i00 as u32);
-                            if ix >= 1 && iy >= 1 && ix + 2 < w1 && iy + 2 < h1 {
-                                2
-                            } else {
-                                1
-                            }
-                        }
-                        None => 0,
-                    };
-                }
-                // Pass 2: the values. Bicubic: bilinear interpolation error on fine texture would
-                // bias the estimate and inflate the residual scale. (Two short loops keep the
-                // interpolation's operands in registers; one long loop spilled them.)
-                let vals = out.res[r.clone()]
-                    .iter_mut()
-                    .zip(&out.fx[r.clone()])
-                    .zip(&out.fy[r.clone()])
-                    .zip(&out.qi[r.clone()])
-                    .zip(&out.valid[r.clone()])
-                    .zip(z0);
-                for (((((res, &fx), &fy), &qi), &valid), &z0) in vals {
-                    let i00 = qi as usize;
-                    let v = match valid {
-                        0 => continue,
-                        2 => bicubic(d1, i00, w1, fx, fy),
-                        _ => bilinear(d1, i00, w1, fx, fy),
-                    };
-                    *res = v - z0 - c;
-                    n_valid += 1;
-                }
-                let (g0x, g0y) = (&l0.gx[first..first + sp.len], &l0.gy[first..first + sp.len]);
-                let grads = out.gx[r.clone()]
-                    .iter_mut()
-                    .zip(&mut out.gy[r])
-                    .zip(g0x)
-                    .zip(g0y);
-                for (((gxo, gyo), &ax), &ay) in grads {
-                    *gxo = t11 * ax + t12 * ay;
-                    *gyo = t21 * ax + t22 * ay;
-                }
-            }
-            return n_valid;
-        }
-        // Coarse levels: bilinear values and second-frame gradients in the sample loop, then the
-        // first frame's mapped gradients averaged in from contiguous rows (see above). The sample
-        // positions are not stored: only the full-resolution covariance reads them.
         for sp in spans {
-            let y = sp.j as f64;
-            let (qx0, qy0) = (cx + bx2 * y, cy + by2 * y);
             let r = sp.k0 - kb..sp.k0 - kb + sp.len;
             let first = idx[sp.k0] as usize;
-            let z0 = &d0[first..first + sp.len];
-            let iter = out.res[r.clone()]
-                .iter_mut()
-                .zip(&mut out.gx[r.clone()])
-                .zip(&mut out.gy[r.clone()])
-                .zip(&mut out.valid[r.clone()])
-                .zip(z0);
-            for (t, ((((res, gxo), gyo), valid), &z0)) in iter.enumerate() {
-                let x = (sp.i0 + t) as f64;
-                let Some(Sample { fx, fy, i00, .. }) =
-                    Sample::at(qx0 + bx1 * x, qy0 + by1 * x, xmax, ymax, w1, h1)
-                else {
-                    *valid = 0;
-                    continue;
-                };
-                *res = bilinear(d1, i00, w1, fx, fy) - z0 - c;
-                *gxo = bilinear(&l1.gx, i00, w1, fx, fy);
-                *gyo = bilinear(&l1.gy, i00, w1, fx, fy);
-                *valid = 1;
-                n_valid += 1;
-            }
-            let (g0x, g0y) = (&l0.gx[first..first + sp.len], &l0.gy[first..first + sp.len]);
-            let grads = out.gx[r.clone()]
-                .iter_mut()
-                .zip(&mut out.gy[r])
-                .zip(g0x)
-                .zip(g0y);
-            for (((gxo, gyo), &ax), &ay) in grads {
-                *gxo = 0.5 * (*gxo + t11 * ax + t12 * ay);
-                *gyo = 0.5 * (*gyo + t21 * ax + t22 * ay);
+            if self.full_res {
+                n_valid += self.full_res_span(sp, first, r.clone(), &mut out);
+                self.map_gradients::<false>(first, &mut out.gx[r.clone()], &mut out.gy[r]);
+            } else {
+                n_valid += self.coarse_span(sp, first, r.clone(), &mut out);
+                self.map_gradients::<true>(first, &mut out.gx[r.clone()], &mut out.gy[r]);
             }
         }
         n_valid
+    }
+
+    /// The second frame's sample position of column `x` on the span's row.
+    #[inline(always)]
+    fn sample(&self, sp: &Span, x: usize) -> Option<Sample> {
+        let [cx, cy] = self.c;
+        let [bx1, bx2, by1, by2] = self.b;
+        let (y, x) = (sp.j as f64, x as f64);
+        let (w1, h1) = (self.l1.width, self.l1.height);
+        let (qx, qy) = (cx + bx2 * y + bx1 * x, cy + by2 * y + by1 * x);
+        Sample::at(qx, qy, (w1 - 1) as f64, (h1 - 1) as f64, w1, h1)
+    }
+
+    /// Full resolution, one span (entries `r`, first pixel `first` in the first frame's level):
+    /// where each sample falls and which taps it uses (`valid` 2 for the bicubic interior, 1 for
+    /// the bilinear border), then the residuals. Bicubic: bilinear interpolation error on fine
+    /// texture would bias the estimate and inflate the residual scale. (Two short loops keep the
+    /// interpolation's operands in registers; one long loop spilled them.)
+    #[inline(always)]
+    fn full_res_span(
+        &self,
+        sp: &Span,
+        first: usize,
+        r: Range<usize>,
+        out: &mut Samples<'_>,
+    ) -> usize {
+        let (w1, h1) = (self.l1.width, self.l1.height);
+        let pos = out.fx[r.clone()]
+            .iter_mut()
+            .zip(&mut out.fy[r.clone()])
+            .zip(&mut out.qi[r.clone()])
+            .zip(&mut out.valid[r.clone()]);
+        for (t, (((fxo, fyo), qio), valid)) in pos.enumerate() {
+            *valid = match self.sample(sp, sp.i0 + t) {
+                Some(Sample {
+                    ix,
+                    iy,
+                    fx,
+                    fy,
+                    i00,
+                }) => {
+                    (*fxo, *fyo, *qio) = (fx, fy, i00 as u32);
+                    if ix >= 1 && iy >= 1 && ix + 2 < w1 && iy + 2 < h1 {
+                        2
+                    } else {
+                        1
+                    }
+                }
+                None => 0,
+            };
+        }
+        let (d1, z0) = (&self.l1.data[..], &self.l0.data[first..first + sp.len]);
+        let vals = out.res[r.clone()]
+            .iter_mut()
+            .zip(&out.fx[r.clone()])
+            .zip(&out.fy[r.clone()])
+            .zip(&out.qi[r.clone()])
+            .zip(&out.valid[r])
+            .zip(z0);
+        let mut n_valid = 0;
+        for (((((res, &fx), &fy), &qi), &valid), &z0) in vals {
+            let i00 = qi as usize;
+            let v = match valid {
+                0 => continue,
+                2 => bicubic(d1, i00, w1, fx, fy),
+                _ => bilinear(d1, i00, w1, fx, fy),
+            };
+            *res = v - z0 - self.offset;
+            n_valid += 1;
+        }
+        n_valid
+    }
+
+    /// A coarse level, one span: bilinear residuals and the second frame's gradients.
+    #[inline(always)]
+    fn coarse_span(
+        &self,
+        sp: &Span,
+        first: usize,
+        r: Range<usize>,
+        out: &mut Samples<'_>,
+    ) -> usize {
+        let (l1, w1) = (self.l1, self.l1.width);
+        let z0 = &self.l0.data[first..first + sp.len];
+        let iter = out.res[r.clone()]
+            .iter_mut()
+            .zip(&mut out.gx[r.clone()])
+            .zip(&mut out.gy[r.clone()])
+            .zip(&mut out.valid[r])
+            .zip(z0);
+        let mut n_valid = 0;
+        for (t, ((((res, gxo), gyo), valid), &z0)) in iter.enumerate() {
+            let Some(Sample { fx, fy, i00, .. }) = self.sample(sp, sp.i0 + t) else {
+                *valid = 0;
+                continue;
+            };
+            *res = bilinear(&l1.data, i00, w1, fx, fy) - z0 - self.offset;
+            *gxo = bilinear(&l1.gx, i00, w1, fx, fy);
+            *gyo = bilinear(&l1.gy, i00, w1, fx, fy);
+            *valid = 1;
+            n_valid += 1;
+        }
+        n_valid
+    }
+
+    /// The first frame's gradients at the span's pixels (from `first` in its level) mapped
+    /// through (I + D)^−T into `gx`, `gy`; with `AVERAGE` (coarse levels) averaged with what they
+    /// hold, the second frame's gradients.
+    #[inline(always)]
+    fn map_gradients<const AVERAGE: bool>(&self, first: usize, gx: &mut [f32], gy: &mut [f32]) {
+        let [t11, t12, t21, t22] = self.t;
+        let n = gx.len();
+        let (g0x, g0y) = (&self.l0.gx[first..first + n], &self.l0.gy[first..first + n]);
+        for (((gxo, gyo), &ax), &ay) in gx.iter_mut().zip(gy).zip(g0x).zip(g0y) {
+            if AVERAGE {
+                *gxo = 0.5 * (*gxo + t11 * ax + t12 * ay);
+                *gyo = 0.5 * (*gyo + t21 * ax + t22 * ay);
+            } else {
+                *gxo = t11 * ax + t12 * ay;
+                *gyo = t21 * ax + t22 * ay;
+            }
+        }
     }
 }
 

@@ -7,49 +7,53 @@
 //! step works on whole cells: a pixel's scatter is 16 cell updates, the separable convolution is
 //! five cell products per pass, and the outer product of a cell is one broadcast product per
 //! parameter. The loops are written on `[f32; 8]` and compiled for the best instruction set
-//! available at run time ([`crate::simd::simd`]); the arithmetic (separate products and sums, fixed order) is
-//! the same on every instruction set, so the result does not depend on the machine's.
+//! available at run time ([`crate::simd::simd`]); the arithmetic (separate products and sums,
+//! fixed order) is the same on every instruction set, so the result does not depend on the
+//! machine's.
 
-use nalgebra::SMatrix;
-
+use crate::estimator::{Mat7, Span, cubic_weights};
 use crate::pyramid::{KERNEL, Level};
 
 /// One grid cell: the parameters' channels, unused lanes zero.
 pub(crate) type Cell = [f32; 8];
-
-type Mat7 = SMatrix<f64, 7, 7>;
 
 /// The grid of one frame: `bw`×`bh` cells with origin (`ox`, `oy`) in the level, onto which the
 /// per-pixel vectors `u` are scattered at `pos` (through the interpolation taps at fractions
 /// (`fx`, `fy`) for the second frame, `l1`), then convolved.
 pub(crate) struct Grid<'a> {
     /// Channels used (the model's parameter count).
-    pub n: usize,
-    pub bw: usize,
-    pub bh: usize,
-    pub ox: isize,
-    pub oy: isize,
+    pub(crate) n: usize,
+    pub(crate) bw: usize,
+    pub(crate) bh: usize,
+    pub(crate) ox: isize,
+    pub(crate) oy: isize,
     /// Half-width of the smoothing kernel (0 without pre-smoothing).
-    pub pad: usize,
+    pub(crate) pad: usize,
     /// Taps before and after the sample position (1 and 2 for the second frame, else 0).
-    pub taps: (usize, usize),
-    pub presmooth: bool,
-    pub l1: Option<&'a Level>,
-    pub u: &'a [Cell],
-    pub pos: &'a [(u32, u32)],
-    pub valid: &'a [u8],
-    pub fx: &'a [f32],
-    pub fy: &'a [f32],
-    pub spans: &'a [crate::estimator::Span],
+    pub(crate) taps: (usize, usize),
+    pub(crate) presmooth: bool,
+    pub(crate) l1: Option<&'a Level>,
+    pub(crate) u: &'a [Cell],
+    pub(crate) pos: &'a [(u32, u32)],
+    pub(crate) valid: &'a [u8],
+    pub(crate) fx: &'a [f32],
+    pub(crate) fy: &'a [f32],
+    pub(crate) spans: &'a [Span],
     /// Per span, the lowest and highest sample row of its valid pixels.
-    pub span_rows: &'a [(u32, u32)],
+    pub(crate) span_rows: &'a [(u32, u32)],
 }
 
 impl Grid<'_> {
     /// Σ v vᵀ over grid rows `r0..r1`, computed on rows `r0 − pad .. r1 + pad` (the halo the
     /// convolution reads) in `cells`, with `tmp` for the horizontal pass.
     #[inline(always)]
-    pub fn band(&self, r0: usize, r1: usize, cells: &mut Vec<Cell>, tmp: &mut Vec<Cell>) -> Mat7 {
+    pub(crate) fn band(
+        &self,
+        r0: usize,
+        r1: usize,
+        cells: &mut Vec<Cell>,
+        tmp: &mut Vec<Cell>,
+    ) -> Mat7 {
         let bw = self.bw;
         let (lr0, lr1) = (r0.saturating_sub(self.pad), (r1 + self.pad).min(self.bh));
         let lh = lr1 - lr0;
@@ -259,19 +263,6 @@ fn symmetric<const N: usize>(total: &[[f64; 8]; N]) -> Mat7 {
         }
     }
     m
-}
-
-/// Keys' cubic convolution weights (a = −0.5) of the taps −1, 0, 1, 2 at fraction `f`.
-#[inline(always)]
-pub(crate) fn cubic_weights(f: f32) -> [f32; 4] {
-    let f2 = f * f;
-    let f3 = f2 * f;
-    [
-        -0.5 * f3 + f2 - 0.5 * f,
-        1.5 * f3 - 2.5 * f2 + 1.0,
-        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
-        0.5 * f3 - 0.5 * f2,
-    ]
 }
 
 #[cfg(test)]

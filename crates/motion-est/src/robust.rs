@@ -200,35 +200,39 @@ const BLOCK: usize = 1024;
 /// of [`BLOCK`] values, the blocks' sums added in f64 in block order (whether the blocks were
 /// computed concurrently — long inputs with the `parallel` feature — or not).
 fn truncated_sum(res: &[f32], valid: &[u8], t: f32) -> (f64, usize) {
-    // The blocks' sums of a run of blocks, compiled for the best instruction set.
-    let blocks = |rs: &[f32], vs: &[u8]| -> Vec<(f64, usize)> {
-        simd(
-            #[inline(always)]
-            || {
-                rs.chunks(BLOCK)
-                    .zip(vs.chunks(BLOCK))
-                    .map(|(rb, vb)| truncated_block(rb, vb, t))
-                    .collect()
-            },
-        )
-    };
+    let add = |(s, n): (f64, usize), (bs, bn): (f64, usize)| (s + bs, n + bn);
     #[cfg(feature = "parallel")]
-    let parts: Vec<(f64, usize)> = if res.len() > 16 * BLOCK {
+    if res.len() > 16 * BLOCK {
         // Tasks of 16 blocks (fewer, larger tasks than one per block); the block sums come back
-        // in block order.
+        // in block order and are added in it.
         use rayon::prelude::*;
-        res.par_chunks(16 * BLOCK)
+        let parts: Vec<(f64, usize)> = res
+            .par_chunks(16 * BLOCK)
             .zip(valid.par_chunks(16 * BLOCK))
-            .flat_map_iter(|(rs, vs)| blocks(rs, vs))
-            .collect()
-    } else {
-        blocks(res, valid)
-    };
-    #[cfg(not(feature = "parallel"))]
-    let parts = blocks(res, valid);
-    parts
-        .into_iter()
-        .fold((0.0, 0), |(s, n), (bs, bn)| (s + bs, n + bn))
+            .flat_map_iter(|(rs, vs)| {
+                simd(
+                    #[inline(always)]
+                    || {
+                        rs.chunks(BLOCK)
+                            .zip(vs.chunks(BLOCK))
+                            .map(|(rb, vb)| truncated_block(rb, vb, t))
+                            .collect::<Vec<_>>()
+                    },
+                )
+            })
+            .collect();
+        return parts.into_iter().fold((0.0, 0), add);
+    }
+    // The same block sums, added as they come (no buffer).
+    simd(
+        #[inline(always)]
+        || {
+            res.chunks(BLOCK)
+                .zip(valid.chunks(BLOCK))
+                .map(|(rb, vb)| truncated_block(rb, vb, t))
+                .fold((0.0, 0), add)
+        },
+    )
 }
 
 /// [`truncated_sum`] of one block.

@@ -1,8 +1,29 @@
 //! The synthetic 320×240 pair shared by the benchmark (`benches/motion.rs`) and the profiling
 //! driver (`examples/motion_profile.rs`), included in both with `#[path]`.
 
+use motion_est::{Ellipse, Region};
+
 pub const W: usize = 320;
 pub const H: usize = 240;
+
+/// The tracker's use: an ellipse of semi-axes 22×28 px (an object of ~44×56 px, 1935 pixels),
+/// centred on the frame centre, which is also the origin of its motion.
+pub const TRACK_CENTRE: [f64; 2] = [159.5, 119.5];
+
+/// The tracking ellipse's region.
+pub fn tracking_ellipse() -> Region<'static> {
+    Region::Ellipse(Ellipse {
+        cx: TRACK_CENTRE[0],
+        cy: TRACK_CENTRE[1],
+        a: 22.0,
+        b: 28.0,
+        theta: 0.0,
+    })
+}
+
+/// A warm start 0.5 px off the pair's true motion (3, −2) + 3 % zoom, in the layout of
+/// `MotionEstimate::params` (affine, no offset).
+pub const WARM_GUESS: [f64; 6] = [2.5, 0.03, 0.0, -1.6, 0.0, 0.03];
 
 /// A textured pair: frame 1 is frame 0 displaced by (3, −2) px plus `zoom`·(x, y) about the centre
 /// (zoom = 0 for the translation model, 0.03 — a 3 % zoom — for the others, so every model fits).
