@@ -212,12 +212,7 @@ fn truncated_sum(res: &[f32], valid: &[u8], t: f32) -> (f64, usize) {
             .flat_map_iter(|(rs, vs)| {
                 simd(
                     #[inline(always)]
-                    || {
-                        rs.chunks(BLOCK)
-                            .zip(vs.chunks(BLOCK))
-                            .map(|(rb, vb)| truncated_block(rb, vb, t))
-                            .collect::<Vec<_>>()
-                    },
+                    || block_sums(rs, vs, t).collect::<Vec<_>>(),
                 )
             })
             .collect();
@@ -226,13 +221,20 @@ fn truncated_sum(res: &[f32], valid: &[u8], t: f32) -> (f64, usize) {
     // The same block sums, added as they come (no buffer).
     simd(
         #[inline(always)]
-        || {
-            res.chunks(BLOCK)
-                .zip(valid.chunks(BLOCK))
-                .map(|(rb, vb)| truncated_block(rb, vb, t))
-                .fold((0.0, 0), add)
-        },
+        || block_sums(res, valid, t).fold((0.0, 0), add),
     )
+}
+
+/// The [`truncated_block`] sums of the blocks of a run of values, in block order.
+#[inline(always)]
+fn block_sums<'a>(
+    res: &'a [f32],
+    valid: &'a [u8],
+    t: f32,
+) -> impl Iterator<Item = (f64, usize)> + 'a {
+    res.chunks(BLOCK)
+        .zip(valid.chunks(BLOCK))
+        .map(move |(rb, vb)| truncated_block(rb, vb, t))
 }
 
 /// [`truncated_sum`] of one block.
