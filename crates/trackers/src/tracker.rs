@@ -44,8 +44,10 @@ pub struct Estimate {
     pub gamma: Option<f64>,
     /// α̂ and its probabilities (`None` without the status HMM).
     pub status: Option<StatusEstimate>,
-    /// Number of motion clusters whose motion was estimated, and how many fell back to the prior
-    /// prediction (both 0 without motion).
+    /// Number of non-empty motion clusters, and how many of them fell back to the prior
+    /// prediction because their motion could not be estimated (both 0 without motion). Clusters
+    /// left empty by k-means (fewer distinct particles than K after resampling) are not counted:
+    /// no particle uses them, so their motion is not estimated.
     pub motion_clusters: (usize, usize),
     /// Wall time of the update, milliseconds.
     pub millis: f64,
@@ -233,10 +235,17 @@ impl ParticleTracker {
         let spec =
             motion_est::ModelSpec::new(motion_est::MotionModel::Affine, self.config.motion.offset);
         self.clusters.clear();
-        let mut failures = 0;
+        let (mut used, mut failures) = (0, 0);
         let mut warm: Option<Vec<f64>> = None;
         for (c, mean) in self.clustering.means.iter().enumerate() {
-            let size = self.clustering.sizes[c].max(1) as f64;
+            if self.clustering.sizes[c] == 0 {
+                // No particle will read this entry; it only keeps the indices aligned.
+                self.clusters
+                    .push(ClusterMotion::fallback(&self.dynamics, mean, mean));
+                continue;
+            }
+            used += 1;
+            let size = self.clustering.sizes[c] as f64;
             let mean_prev = prev_means[c].map(|v| v / size);
             let pose = space.pose(mean);
             let sigmas = self.dynamics.settings.sigmas(space, mean);
@@ -274,7 +283,7 @@ impl ParticleTracker {
             self.clusters.push(motion);
         }
         self.prev_means = prev_means;
-        Ok((k, failures))
+        Ok((used, failures))
     }
 
     fn estimate(&mut self, set: &ParticleSet<Particle>) -> Result<PosteriorSummary> {
