@@ -90,11 +90,12 @@ fn every_preset_follows_a_short_cluttered_sequence() {
     // preset's threshold. Thresholds sit about 0.1 below what each preset measured
     // (docs/RESULTS.md), so that they catch a broken tracker (a lost track scores below 0.3)
     // without flaking on Monte Carlo noise. Most presets run on the three-band clutter scene;
-    // w-occ and w-eval run on the distractor scene: on the heavy-clutter band their occlusion
-    // hypotheses (γ near 1 makes the pose irrelevant) win often enough that they lose the target
-    // in two runs out of three (measured mean IoU 0.43 and 0.32) — a known weakness of Wu's
-    // occlusion model with W = 8, reported rather than hidden. On the distractor scene w-occ
-    // measures 0.69 and w-eval 0.48, the weakest of the presets.
+    // w-occ and w-eval run on the distractor scene: on this 40-frame clip's heavy-clutter band
+    // their occlusion hypotheses (γ near 1 makes the pose irrelevant) win often enough that they
+    // lose the target in all three runs (measured mean IoU 0.30 and 0.23; on the 120-frame
+    // `mclutter` scene they measure 0.91 over seeds 1–8) — a known weakness of Wu's occlusion
+    // model with W = 8, reported rather than hidden. On the distractor scene w-occ measures 0.81
+    // and w-eval 0.88.
     let mclutter = clip(Scenario::Mclutter, 40);
     let distractor = clip(Scenario::Distractor, 40);
     let cases = [
@@ -104,8 +105,8 @@ fn every_preset_follows_a_short_cluttered_sequence() {
         (Preset::WFixed, &mclutter, 0.8),
         (Preset::WSwitch, &mclutter, 0.8),
         (Preset::WHmm, &mclutter, 0.78),
-        (Preset::WOcc, &distractor, 0.6),
-        (Preset::WEval, &distractor, 0.4),
+        (Preset::WOcc, &distractor, 0.7),
+        (Preset::WEval, &distractor, 0.75),
         (Preset::Full, &mclutter, 0.8),
     ];
     let mut report = Vec::new();
@@ -149,39 +150,6 @@ fn motion_proposal_survives_abrupt_motion_that_breaks_tight_condensation() {
     assert!(failed(&m1), "m1 with σ_T = 1 px should lose the target");
     assert!(!failed(&m3), "m3 should never lose it");
     assert!(mean(&m3) > 0.8, "m3 mean IoU {}", mean(&m3));
-}
-
-#[test]
-fn occlusion_estimate_rises_when_the_target_is_hidden() {
-    // The occlusion scene: the target passes behind an opaque, edge-rich occluder and is fully
-    // hidden for about ten frames. w-occ's γ̂ (Wu Eq. 14) must rise from its free-target level to
-    // near 1 while the target is hidden. Wu's model as printed (w-occ) does not fall again: its
-    // γ ≈ 1 hypotheses outscore the reappearing target under Eq. 12, so it never finds the
-    // target again; the rise-and-fall is asserted for w-eval in
-    // `occlusion_estimate_rises_while_hidden_and_falls_after`. See docs/RESULTS.md, "Hidden
-    // processes".
-    let clip = clip(Scenario::Occlusion, 120);
-    let estimates = track(&clip, Preset::WOcc.config(200, 1));
-    // Frame 0 is the initialisation, before any estimate: γ = 0 there.
-    let gamma: Vec<f64> = estimates.iter().map(|e| e.gamma.unwrap_or(0.0)).collect();
-    let visible: Vec<f64> = clip.truth.iter().map(|t| t.visible_fraction).collect();
-    let hidden: Vec<usize> = (0..visible.len()).filter(|&k| visible[k] < 0.1).collect();
-    let first_hidden = hidden[0];
-    let free: Vec<f64> = (1..first_hidden)
-        .filter(|&k| visible[k] > 0.99)
-        .map(|k| gamma[k])
-        .collect();
-    let during: Vec<f64> = hidden.iter().map(|&k| gamma[k]).collect();
-    let (before, during) = (mean(&free), mean(&during));
-    println!("γ̂ while free {before:.3}, while hidden {during:.3}");
-    assert!(
-        before < 0.25,
-        "γ̂ should stay low while the target is free: {before:.3}"
-    );
-    assert!(
-        during > 0.8,
-        "γ̂ should approach 1 while the target is hidden: {during:.3}"
-    );
 }
 
 #[test]
@@ -231,31 +199,42 @@ fn gamma_phases(clip: &Clip, estimates: &[Estimate]) -> (f64, f64, f64) {
     )
 }
 
-#[test]
-fn occlusion_estimate_rises_while_hidden_and_falls_after() {
-    // Issue 7: γ̂ rises during the occlusion and falls after it. Asserted for w-eval, the preset
-    // that does both: its likelihood reads γ as the hidden fraction of the contour, hidden as
-    // one arc whose lines all score one constant (`LikelihoodSettings::occlusion_arc`,
-    // `neutral_hidden_lines`), so "whole contour at the true pose, partly hidden" beats
-    // "shrunk onto the visible sliver", the hidden target coasts, and the reacquisition jump
-    // finds it again. w-occ (Wu as printed) rises but never finds the target again (the test
-    // above). Measured γ̂ free / hidden / after, seeds 1–4: 0.113 / 0.772 / 0.112,
-    // 0.116 / 0.617 / 0.111, 0.129 / 0.793 / 0.105, 0.106 / 0.865 / 0.105. Each seed must rise
-    // by more than 0.3 and fall back by more than 0.3; the means must be below 0.2 free and
-    // after and above 0.5 hidden. A tracker whose γ̂ stays flat (w-eval before this model:
-    // 0.08–0.12 throughout) or stays high after (w-occ: 0.93 to the end) fails.
+/// γ̂ of `preset` over `seeds` on the occlusion scene must rise while the target is hidden and
+/// fall after it: each seed by more than 0.3 both ways, and on average below 0.2 free and after,
+/// above 0.5 hidden. A tracker whose γ̂ stays flat, or stays high once the target is lost, fails.
+fn assert_rise_and_fall(preset: Preset, seeds: std::ops::RangeInclusive<u64>) {
     let clip = clip(Scenario::Occlusion, 120);
-    let phases: Vec<(f64, f64, f64)> = (1..=4)
-        .map(|seed| gamma_phases(&clip, &track(&clip, Preset::WEval.config(200, seed))))
+    let phases: Vec<(f64, f64, f64)> = seeds
+        .clone()
+        .map(|seed| gamma_phases(&clip, &track(&clip, preset.config(200, seed))))
         .collect();
-    println!("w-eval γ̂ free / hidden / after, seeds 1–4: {phases:.3?}");
+    println!("{preset} γ̂ free / hidden / after, seeds {seeds:?}: {phases:.3?}");
     for &(free, hidden, after) in &phases {
-        assert!(hidden - free > 0.3, "no rise: {phases:.3?}");
-        assert!(hidden - after > 0.3, "no fall: {phases:.3?}");
+        assert!(hidden - free > 0.3, "{preset}: no rise: {phases:.3?}");
+        assert!(hidden - after > 0.3, "{preset}: no fall: {phases:.3?}");
     }
     let avg = |f: fn(&(f64, f64, f64)) -> f64| mean(&phases.iter().map(f).collect::<Vec<_>>());
     let (free, hidden, after) = (avg(|p| p.0), avg(|p| p.1), avg(|p| p.2));
-    assert!(free < 0.2, "γ̂ while free {free:.3}");
-    assert!(hidden > 0.5, "γ̂ while hidden {hidden:.3}");
-    assert!(after < 0.2, "γ̂ after {after:.3}");
+    assert!(free < 0.2, "{preset}: γ̂ while free {free:.3}");
+    assert!(hidden > 0.5, "{preset}: γ̂ while hidden {hidden:.3}");
+    assert!(after < 0.2, "{preset}: γ̂ after {after:.3}");
+}
+
+#[test]
+fn occlusion_estimate_rises_while_hidden_and_falls_after() {
+    // Issue 7: w-occ's γ̂ rises during the occlusion and falls after it. Both occlusion presets
+    // read γ as the hidden fraction of the contour, hidden as one arc whose lines all score one
+    // constant (`LikelihoodSettings::occlusion_arc`, `neutral_hidden_lines`), so "whole contour
+    // at the true pose, partly hidden" beats "shrunk onto the visible sliver", the hidden target
+    // coasts, and the reacquisition jump finds it again. w-occ's γ is Wu's random walk with
+    // σ_γ = 0.3 (`W_OCC_SIGMA_GAMMA`), w-eval's the status HMM's.
+    //
+    // Measured γ̂ free / hidden / after: w-occ, seeds 1–8: 0.068 / 0.818 / 0.068,
+    // 0.083 / 0.929 / 0.093, 0.065 / 0.886 / 0.091, 0.138 / 0.621 / 0.088, 0.097 / 0.800 / 0.076,
+    // 0.075 / 0.720 / 0.083, 0.126 / 0.930 / 0.112, 0.073 / 0.909 / 0.073; w-eval, seeds 1–4:
+    // 0.113 / 0.772 / 0.112, 0.116 / 0.617 / 0.111, 0.129 / 0.793 / 0.105, 0.106 / 0.865 / 0.105.
+    // Wu's Eq. 11–12 as printed (w-occ before the seventh pass) rose to 0.93 and stayed there to
+    // the end, lost; with the arc but σ_γ = 0.1, γ̂ did not rise on seeds 1, 3 and 6.
+    assert_rise_and_fall(Preset::WOcc, 1..=8);
+    assert_rise_and_fall(Preset::WEval, 1..=4);
 }

@@ -10,7 +10,7 @@
 //! (the ratio form of Wu's likelihood, `LikelihoodSettings::likelihood_ratio`), ARC=1/0 and NEUTRAL=1/0
 //! (`LikelihoodSettings::occlusion_arc`, `neutral_hidden_lines`), LGR (κ of γ | locked,
 //! `DynamicsSettings::locked_gamma_rate`), SREV (`DynamicsSettings::shape_reversion`), LOCKLO, LOCKHI, PARTLO, PARTHI (the status HMM's γ
-//! ranges), TLP (its locked → partially occluded probability), V (per-seed
+//! ranges), SIGG (σ_γ of the random-walk γ), TLP (its locked → partially occluded probability), V (per-seed
 //! lines), REACQ=1/0 (reacquisition jump on/off, `TrackerConfig::reacquisition`) with RQLOCK,
 //! RQRATE, RQMAX, RQSPREAD, RQGROW, RQPG, RQVG, RQSG, RQBACK, RQSHAPE (its settings). Diagnostics: TRACE (one line per frame), LAND=k (likelihood landscape at frame k),
 //! DUMP=k (frame k as a binary PGM on stdout). Besides the IoU it prints β̂ accuracy, γ̂ MAE and α̂
@@ -182,6 +182,10 @@ fn main() {
             if let Some(v) = env("RQBACK") {
                 r.rollback = v as usize;
             }
+        }
+        if let (Some(v), trackers::OcclusionMode::RandomWalk(oc)) = (env("SIGG"), &mut c.occlusion)
+        {
+            oc.sigma_gamma = v;
         }
         if let trackers::OcclusionMode::Status(sc) = &mut c.occlusion {
             for (k, slot) in [

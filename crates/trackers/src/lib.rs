@@ -13,8 +13,8 @@
 //! | `w-fixed` | Wu, one λ | Gaussian AR2 (affine) | Wu Eq. 1–6 |
 //! | `w-switch` | Wu §6.1 without HMM | prior, β switching | Wu Eq. 1–6 at λ̄_β |
 //! | `w-hmm` | Wu Fig. 5–6 | prior, {β, λ} HMM | Wu Eq. 1–6 at λ |
-//! | `w-occ` | Wu §5 | prior, {β, λ} HMM, γ walk | Wu Eq. 11–12 |
-//! | `w-eval` | Wu §6.3 | prior, {β, λ} HMM, {α, γ} HMM | Wu Eq. 11–12 |
+//! | `w-occ` | Wu §5 | prior, {β, λ} HMM, γ walk (σ_γ 0.3), reacquisition | Wu Eq. 11–12, γ as one hidden arc |
+//! | `w-eval` | Wu §6.3 | prior, {β, λ} HMM, {α, γ} HMM, reacquisition | Wu Eq. 11–12, γ as one hidden arc |
 //! | `full` | neither | motion, Eq. 16, all hidden processes | Wu Eq. 11–12 · p_c2 · p_c1 · prior / q |
 //!
 //! # Example
