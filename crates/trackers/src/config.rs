@@ -145,11 +145,11 @@ pub struct TrackerConfig {
     #[serde(default = "default_init_spread")]
     pub init_spread: f64,
     /// The reacquisition jump after an occlusion (see [`crate::reacquire`]); `None`: off. On in
-    /// w-eval and full. Measured (sweep, 120 frames, 200 particles, seeds 1–4; mean IoU over the
+    /// w-occ, w-eval and full. Measured (sweep, 120 frames, 200 particles, seeds 1–4; mean IoU over the
     /// frames after the full occlusion of the `occlusion` scene): w-eval 0 → 0.81 (4 of 4 tracks
     /// found again), full 0 → 0.50 (2 of 4 found, 1 half); `mclutter` and `distractor` unchanged
-    /// within Monte Carlo noise (docs/RESULTS.md). On in w-occ too since the seventh pass (see
-    /// [`W_OCC_SIGMA_GAMMA`]). With Wu's Eq. 12 as printed the jump does not help: a lost track
+    /// within Monte Carlo noise (docs/RESULTS.md); w-occ since the seventh pass, see
+    /// [`W_OCC_SIGMA_GAMMA`]. With Wu's Eq. 12 as printed the jump does not help: a lost track
     /// sits on γ ≈ 1 hypotheses that Eq. 12 rates above the reappearing target.
     #[serde(default)]
     pub reacquisition: Option<ReacquisitionSettings>,
