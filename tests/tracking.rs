@@ -141,7 +141,7 @@ fn motion_proposal_survives_abrupt_motion_that_breaks_tight_condensation() {
     // (clusters left empty by k-means are not counted, see `Estimate::motion_clusters`).
     for (k, e) in m3_estimates.iter().enumerate().skip(1) {
         let (used, fallbacks) = e.motion_clusters;
-        assert!(used >= 1 && used <= 20, "frame {k}: {used} clusters");
+        assert!((1..=20).contains(&used), "frame {k}: {used} clusters");
         assert_eq!(
             fallbacks, 0,
             "frame {k}: {fallbacks} of {used} clusters fell back"
