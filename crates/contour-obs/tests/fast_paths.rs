@@ -10,38 +10,26 @@ use contour_obs::{
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
+/// The benchmark's scene generator (only its clutter image is used here).
+#[path = "../examples/common/frame.rs"]
+#[allow(dead_code)]
+mod frame;
+
 const W: usize = 120;
 const H: usize = 90;
 
-/// Random grey discs (radius 2–7 px, grey 0–255) on mid-grey, then a bright ellipse: edges of
-/// every strength, including many near the detection threshold.
+/// Random grey discs (radius 2–7 px) on mid-grey, then a bright ellipse: edges of every
+/// strength, including many near the detection threshold.
 fn clutter_image(rng: &mut Pcg64Mcg) -> Vec<f32> {
-    let mut img = vec![110.0f32; W * H];
-    for _ in 0..120 {
-        let (cx, cy, r): (f64, f64, f64) = (
-            rng.random_range(0.0..W as f64),
-            rng.random_range(0.0..H as f64),
-            rng.random_range(2.0..7.0),
-        );
-        let g = rng.random_range(0.0..255.0) as f32;
-        for y in 0..H {
-            for x in 0..W {
-                let (dx, dy) = (x as f64 - cx, y as f64 - cy);
-                if dx * dx + dy * dy <= r * r {
-                    img[y * W + x] = g;
-                }
-            }
-        }
+    frame::DiscClutter {
+        width: W,
+        height: H,
+        background: 110.0,
+        discs: 120,
+        radii: 2.0..7.0,
+        ellipse: [60.0, 45.0, 30.0, 20.0],
     }
-    for y in 0..H {
-        for x in 0..W {
-            let (u, v) = ((x as f64 - 60.0) / 30.0, (y as f64 - 45.0) / 20.0);
-            if u * u + v * v <= 1.0 {
-                img[y * W + x] = 230.0;
-            }
-        }
-    }
-    img
+    .render(rng)
 }
 
 /// Poses around the ellipse, some reaching over the border and some far outside.

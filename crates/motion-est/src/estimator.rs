@@ -1727,6 +1727,20 @@ mod tests {
         )
     }
 
+    /// The affine motion, its origin and the tilted ellipse that several tests share: a region
+    /// small enough to stay on the calling thread.
+    const SHARED_MOTION: [f64; 6] = [0.8, 0.01, -0.01, 0.5, 0.015, -0.005];
+    const SHARED_ORIGIN: [f64; 2] = [60.0, 50.0];
+    fn shared_ellipse() -> Ellipse {
+        Ellipse {
+            cx: 60.0,
+            cy: 50.0,
+            a: 30.0,
+            b: 20.0,
+            theta: 0.4,
+        }
+    }
+
     #[test]
     fn scale_model_and_offset_are_recovered() {
         // Noise-free smooth texture: only interpolation error remains, far below 0.01 px at the
@@ -1760,16 +1774,10 @@ mod tests {
         // the same loops, on a region small enough to stay on this thread: parameters,
         // covariance, scale and inlier fraction bit for bit, with the offset and the tracking
         // preset's first-order path too.
-        let origin = [60.0, 50.0];
-        let (f0, f1) = pair([0.8, 0.01, -0.01, 0.5, 0.015, -0.005], origin, 3.0);
+        let origin = SHARED_ORIGIN;
+        let (f0, f1) = pair(SHARED_MOTION, origin, 3.0);
         let (v0, v1) = views(&f0, &f1);
-        let region = Region::Ellipse(Ellipse {
-            cx: 60.0,
-            cy: 50.0,
-            a: 30.0,
-            b: 20.0,
-            theta: 0.4,
-        });
+        let region = Region::Ellipse(shared_ellipse());
         for settings in [Settings::default(), Settings::tracking()] {
             let est = MotionEstimator::new(settings).unwrap();
             let spec = ModelSpec::new(MotionModel::Affine, true);
@@ -1794,16 +1802,10 @@ mod tests {
 
     #[test]
     fn ellipse_and_equivalent_mask_give_the_same_estimate() {
-        let origin = [60.0, 50.0];
-        let (f0, f1) = pair([0.8, 0.01, -0.01, 0.5, 0.015, -0.005], origin, 0.0);
+        let origin = SHARED_ORIGIN;
+        let (f0, f1) = pair(SHARED_MOTION, origin, 0.0);
         let (v0, v1) = views(&f0, &f1);
-        let e = Ellipse {
-            cx: 60.0,
-            cy: 50.0,
-            a: 30.0,
-            b: 20.0,
-            theta: 0.4,
-        };
+        let e = shared_ellipse();
         let ell = Region::Ellipse(e);
         let weights: Vec<f32> = (0..W * H)
             .map(|k| ell.weight((k % W) as f64, (k / W) as f64))
@@ -1943,21 +1945,15 @@ mod tests {
         // rejecting some pixels. f32 products summed in f64 every 64 groups: relative agreement
         // to 1e-4 of the largest entry (f32 epsilon 6e-8 × a few hundred terms per flush, with
         // margin).
-        let origin = [60.0, 50.0];
-        let (f0, f1) = pair([0.8, 0.01, -0.01, 0.5, 0.015, -0.005], origin, 3.0);
+        let origin = SHARED_ORIGIN;
+        let (f0, f1) = pair(SHARED_MOTION, origin, 3.0);
         let (v0, v1) = views(&f0, &f1);
         let settings = Settings::default();
         let est = MotionEstimator::new(settings).unwrap();
         let (mut p0, mut p1) = (Pyramid::new(), Pyramid::new());
         est.build_pyramid_into(v0, &mut p0).unwrap();
         est.build_pyramid_into(v1, &mut p1).unwrap();
-        let region = Region::Ellipse(Ellipse {
-            cx: 60.0,
-            cy: 50.0,
-            a: 30.0,
-            b: 20.0,
-            theta: 0.4,
-        });
+        let region = Region::Ellipse(shared_ellipse());
         let (l0, l1) = (p0.level(0).unwrap(), p1.level(0).unwrap());
         let bbox = region.pixel_box(W, H).unwrap();
         let robust = RobustFunction::default();

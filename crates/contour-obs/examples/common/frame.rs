@@ -18,39 +18,64 @@ pub struct Scene {
     pub gammas: Vec<f64>,
 }
 
-/// A bright ellipse on a background of random discs (clutter), grey levels 0–255.
-fn frame(rng: &mut Pcg64Mcg) -> Vec<f32> {
-    let mut img = vec![100.0f32; W * H];
-    for _ in 0..400 {
-        let (cx, cy, r) = (
-            rng.random_range(0.0..W as f64),
-            rng.random_range(0.0..H as f64),
-            rng.random_range(2.0..8.0),
-        );
-        let g = rng.random_range(0.0..255.0) as f32;
-        for y in 0..H {
-            for x in 0..W {
-                if (x as f64 - cx).hypot(y as f64 - cy) <= r {
-                    img[y * W + x] = g;
+/// A cluttered test image: random grey discs (grey 0–255, radius drawn from `radii`) on a
+/// uniform background, then a bright (230) axis-aligned ellipse — edges of every strength, many
+/// near the detection threshold. Shared by the benchmark scene and `tests/fast_paths.rs`.
+pub struct DiscClutter {
+    pub width: usize,
+    pub height: usize,
+    pub background: f32,
+    pub discs: usize,
+    pub radii: std::ops::Range<f64>,
+    /// Centre x, centre y, semi-axis along x, semi-axis along y.
+    pub ellipse: [f64; 4],
+}
+
+impl DiscClutter {
+    /// The image, row-major, drawing the discs from `rng`.
+    pub fn render(&self, rng: &mut Pcg64Mcg) -> Vec<f32> {
+        let (w, h) = (self.width, self.height);
+        let mut img = vec![self.background; w * h];
+        for _ in 0..self.discs {
+            let (cx, cy, r) = (
+                rng.random_range(0.0..w as f64),
+                rng.random_range(0.0..h as f64),
+                rng.random_range(self.radii.clone()),
+            );
+            let g = rng.random_range(0.0..255.0) as f32;
+            for y in 0..h {
+                for x in 0..w {
+                    if (x as f64 - cx).hypot(y as f64 - cy) <= r {
+                        img[y * w + x] = g;
+                    }
                 }
             }
         }
-    }
-    for y in 0..H {
-        for x in 0..W {
-            let (u, v) = ((x as f64 - 160.0) / 40.0, (y as f64 - 120.0) / 28.0);
-            if u * u + v * v <= 1.0 {
-                img[y * W + x] = 230.0;
+        let [ex, ey, ea, eb] = self.ellipse;
+        for y in 0..h {
+            for x in 0..w {
+                let (u, v) = ((x as f64 - ex) / ea, (y as f64 - ey) / eb);
+                if u * u + v * v <= 1.0 {
+                    img[y * w + x] = 230.0;
+                }
             }
         }
+        img
     }
-    img
 }
 
 /// The benchmark's scene (seed 1).
 pub fn scene() -> Scene {
     let mut rng = Pcg64Mcg::seed_from_u64(1);
-    let data = frame(&mut rng);
+    let data = DiscClutter {
+        width: W,
+        height: H,
+        background: 100.0,
+        discs: 400,
+        radii: 2.0..8.0,
+        ellipse: [160.0, 120.0, 40.0, 28.0],
+    }
+    .render(&mut rng);
     let poses = (0..N)
         .map(|_| {
             Affine2::from_ellipse(
