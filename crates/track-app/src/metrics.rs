@@ -105,6 +105,69 @@ pub struct SequenceMetrics {
     pub failed_at_frame: Option<usize>,
     /// Frames per second of the tracker (`None` when no timing was given).
     pub fps: Option<f64>,
+    /// How well the tracker knows it has lost the target: the ROC AUC of its P(lost) as a
+    /// detector of the labelled frames whose IoU is below [`LOST_IOU`] (see [`roc_auc`]).
+    /// `None` when the tracker reports no status, or every labelled frame is on one side.
+    #[serde(default)]
+    pub lost_auc: Option<f64>,
+    /// The (P(lost), IoU < [`LOST_IOU`]) pairs behind `lost_auc`, one per labelled frame, kept
+    /// so that a mean over sequences can pool the frames.
+    #[serde(skip)]
+    pub lost_scores: Vec<(f64, bool)>,
+}
+
+/// A frame whose box overlaps the truth by less than this IoU counts as lost in the
+/// self-evaluation ([`SequenceMetrics::lost_auc`]).
+pub const LOST_IOU: f64 = 0.2;
+
+/// The area under the ROC curve of `scored` (score, is positive): the probability that a random
+/// positive scores above a random negative, ties counting one half (the Mann–Whitney
+/// statistic). `None` without positives or without negatives, or with a score that is not
+/// finite.
+pub fn roc_auc(scored: &[(f64, bool)]) -> Option<f64> {
+    if scored.iter().any(|(s, _)| !s.is_finite()) {
+        return None;
+    }
+    let mut sorted = scored.to_vec();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let positives = sorted.iter().filter(|p| p.1).count();
+    let negatives = sorted.len() - positives;
+    if positives == 0 || negatives == 0 {
+        return None;
+    }
+    // Sum of the positives' mid-ranks (1-based), tied scores sharing their mean rank.
+    let mut rank_sum = 0.0;
+    let mut i = 0;
+    while i < sorted.len() {
+        let mut j = i;
+        while j < sorted.len() && sorted[j].0 == sorted[i].0 {
+            j += 1;
+        }
+        let mid = (i + 1 + j) as f64 / 2.0;
+        rank_sum += mid * sorted[i..j].iter().filter(|p| p.1).count() as f64;
+        i = j;
+    }
+    let p = positives as f64;
+    Some((rank_sum - p * (p + 1.0) / 2.0) / (p * negatives as f64))
+}
+
+/// Adds the self-evaluation to `metrics`: `p_lost[i]` is the tracker's P(lost) at frame `i` of
+/// `estimates` (as passed to [`evaluate`]), `None` when the tracker reports no status.
+pub fn with_self_evaluation(
+    mut metrics: SequenceMetrics,
+    estimates: &[Box2],
+    truth: &[Option<Box2>],
+    p_lost: &[Option<f64>],
+) -> SequenceMetrics {
+    metrics.lost_scores = estimates
+        .iter()
+        .zip(truth)
+        .zip(p_lost)
+        .filter_map(|((est, gt), p)| Some((p.as_ref()?, gt.as_ref()?, est)))
+        .map(|(&p, gt, est)| (p, est.iou(gt) < LOST_IOU))
+        .collect();
+    metrics.lost_auc = roc_auc(&metrics.lost_scores);
+    metrics
 }
 
 /// Scores `estimates` (one box per frame) against `truth` (one entry per frame, `None` for
@@ -160,12 +223,15 @@ pub fn evaluate(
         fps: seconds
             .map(|s| frames_per_second(estimates.len(), s))
             .transpose()?,
+        lost_auc: None,
+        lost_scores: Vec::new(),
     })
 }
 
 /// The mean of each score over several sequences (the last row of `track eval otb`): precision,
 /// AUC, mean IoU, centre error and frames/s are averaged per sequence (each sequence weighs the
-/// same); frame counts are summed; `failed_at_frame` is `None`. `None` for an empty list.
+/// same); frame counts are summed; `failed_at_frame` is `None`; the self-evaluation ROC AUC
+/// pools the labelled frames of every sequence. `None` for an empty list.
 pub fn mean_metrics(all: &[SequenceMetrics]) -> Option<SequenceMetrics> {
     if all.is_empty() {
         return None;
@@ -177,6 +243,7 @@ pub fn mean_metrics(all: &[SequenceMetrics]) -> Option<SequenceMetrics> {
         .map(|m| m.fps)
         .collect::<Option<Vec<f64>>>()
         .map(|v| v.iter().sum::<f64>() / n);
+    let pooled: Vec<(f64, bool)> = all.iter().flat_map(|m| m.lost_scores.clone()).collect();
     Some(SequenceMetrics {
         frames: all.iter().map(|m| m.frames).sum(),
         labelled_frames: all.iter().map(|m| m.labelled_frames).sum(),
@@ -189,6 +256,9 @@ pub fn mean_metrics(all: &[SequenceMetrics]) -> Option<SequenceMetrics> {
         mean_centre_error: mean(&|m| m.mean_centre_error),
         failed_at_frame: None,
         fps,
+        // Pooled over every labelled frame of every sequence, not averaged per sequence.
+        lost_auc: roc_auc(&pooled),
+        lost_scores: pooled,
     })
 }
 
@@ -196,6 +266,22 @@ pub fn mean_metrics(all: &[SequenceMetrics]) -> Option<SequenceMetrics> {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn roc_auc_is_the_mann_whitney_statistic() {
+        // Perfect separation, perfect inversion, and ties at one half.
+        let sep = [(0.9, true), (0.8, true), (0.1, false), (0.2, false)];
+        assert_relative_eq!(roc_auc(&sep).unwrap(), 1.0);
+        let inv = sep.map(|(s, l)| (s, !l));
+        assert_relative_eq!(roc_auc(&inv).unwrap(), 0.0);
+        let ties = [(0.5, true), (0.5, false), (0.5, true), (0.5, false)];
+        assert_relative_eq!(roc_auc(&ties).unwrap(), 0.5);
+        // One of the four positive–negative pairs misordered.
+        let mixed = [(0.9, true), (0.3, true), (0.4, false), (0.1, false)];
+        assert_relative_eq!(roc_auc(&mixed).unwrap(), 0.75);
+        assert!(roc_auc(&[(0.3, true)]).is_none());
+        assert!(roc_auc(&[(f64::NAN, true), (0.1, false)]).is_none());
+    }
 
     #[test]
     fn thresholds_are_exact_twentieths() {

@@ -11,7 +11,7 @@ use trackers::{Estimate, Tracker};
 use crate::groundtruth::{Box2, Ellipse};
 use crate::record::{FrameRecord, TrackerStatus};
 use crate::render::{Overlay, clutter_colour, render_overlay, status_colour};
-use crate::sequence::Frame;
+use crate::sequence::{Frame, Original};
 use crate::{AppError, Result};
 
 /// What colours the estimated contour in overlays.
@@ -144,8 +144,12 @@ impl Session {
         init: &Ellipse,
         truth: Option<Box2>,
     ) -> Result<&FrameRecord> {
-        let view = trackers::Frame::new(frame.gray.width, frame.gray.height, &frame.gray.data)
-            .map_err(|e| AppError::input(&frame.name, e.to_string()))?;
+        let (w, h, grey) = (frame.gray.width, frame.gray.height, &frame.gray.data);
+        let view = match &frame.original {
+            Original::Rgb(rgb) => trackers::Frame::with_rgb(w, h, grey, rgb.as_raw()),
+            Original::Luma(_) => trackers::Frame::new(w, h, grey),
+        }
+        .map_err(|e| AppError::input(&frame.name, e.to_string()))?;
         let estimate = if self.started {
             self.tracker.update(view)
         } else {

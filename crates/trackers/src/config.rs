@@ -8,6 +8,7 @@ use smc_core::{FilterSettings, ResamplingScheme};
 use crate::dynamics::{DynamicsSettings, NoiseKind};
 use crate::observation::{ImplicitMotionSettings, LikelihoodSettings};
 use crate::reacquire::ReacquisitionSettings;
+use crate::region::RegionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
 
@@ -153,6 +154,11 @@ pub struct TrackerConfig {
     /// sits on γ ≈ 1 hypotheses that Eq. 12 rates above the reappearing target.
     #[serde(default)]
     pub reacquisition: Option<ReacquisitionSettings>,
+    /// The region tracker's settings ([`crate::region`]); `None` for the papers' contour
+    /// trackers. When present, [`crate::build`] makes a region tracker, which reads `name`,
+    /// `particles`, `seed` and these settings only.
+    #[serde(default)]
+    pub region: Option<RegionSettings>,
 }
 
 fn yes() -> bool {
@@ -184,6 +190,9 @@ impl TrackerConfig {
         self.dynamics.validate()?;
         self.likelihood.validate()?;
         if let Some(r) = &self.reacquisition {
+            r.validate()?;
+        }
+        if let Some(r) = &self.region {
             r.validate()?;
         }
         self.filter.validate()?;
@@ -310,11 +319,15 @@ pub enum Preset {
     /// Odobez's motion proposal and implicit likelihood with Wu's switching clutter, occlusion and
     /// status processes.
     Full,
+    /// The recommended tracker for real footage: the region tracker ([`crate::region`]), colour
+    /// log-ratio and contour contrast at a working scale set by the target's size, tempered
+    /// weights, a lost/locked chain and reacquisition.
+    Head,
 }
 
 impl Preset {
     /// Every preset.
-    pub const ALL: [Preset; 9] = [
+    pub const ALL: [Preset; 10] = [
         Preset::M1,
         Preset::M2,
         Preset::M3,
@@ -324,6 +337,7 @@ impl Preset {
         Preset::WOcc,
         Preset::WEval,
         Preset::Full,
+        Preset::Head,
     ];
 
     /// The command-line name.
@@ -338,6 +352,7 @@ impl Preset {
             Preset::WOcc => "w-occ",
             Preset::WEval => "w-eval",
             Preset::Full => "full",
+            Preset::Head => "head",
         }
     }
 
@@ -408,6 +423,7 @@ impl Preset {
             estimator: PoseEstimator::Mean,
             init_spread: default_init_spread(),
             reacquisition: None,
+            region: None,
         };
         let wu = TrackerConfig {
             space: ShapeSpace::Affine,
@@ -488,6 +504,10 @@ impl Preset {
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::Status(StatusConfig::default()),
                 reacquisition: Some(ReacquisitionSettings::default()),
+                ..base
+            },
+            Preset::Head => TrackerConfig {
+                region: Some(RegionSettings::default()),
                 ..base
             },
         }

@@ -1,5 +1,7 @@
-//! Grey frames as the trackers see them: row-major f32 in grey levels, borrowed. A thin wrapper
-//! over `contour_obs::GreyView`, which validates the size and the pixels once.
+//! Frames as the trackers see them: row-major f32 grey levels, borrowed, and optionally the 8-bit
+//! RGB pixels of the same frame (the region tracker's colour model reads them; every other tracker
+//! reads grey). A thin wrapper over `contour_obs::GreyView`, which validates the size and the
+//! pixels once.
 
 use contour_obs::GreyView;
 
@@ -9,6 +11,7 @@ use crate::{Error, Result};
 #[derive(Debug, Clone, Copy)]
 pub struct Frame<'a> {
     view: GreyView<'a>,
+    rgb: Option<&'a [u8]>,
 }
 
 impl<'a> Frame<'a> {
@@ -22,7 +25,32 @@ impl<'a> Frame<'a> {
             frame: 0,
             reason: e.to_string(),
         })?;
-        Ok(Self { view })
+        Ok(Self { view, rgb: None })
+    }
+
+    /// Wraps `grey` and the same frame's interleaved 8-bit RGB pixels (`3·width·height` bytes,
+    /// row-major, R G B per pixel).
+    ///
+    /// # Errors
+    /// As [`Frame::new`], and [`Error::BadFrame`] when `rgb` has the wrong length.
+    pub fn with_rgb(width: usize, height: usize, grey: &'a [f32], rgb: &'a [u8]) -> Result<Self> {
+        let mut frame = Self::new(width, height, grey)?;
+        if Some(rgb.len()) != width.checked_mul(height).and_then(|n| n.checked_mul(3)) {
+            return Err(Error::BadFrame {
+                frame: 0,
+                reason: format!(
+                    "{} RGB bytes for a {width}x{height} frame (expected 3 per pixel)",
+                    rgb.len()
+                ),
+            });
+        }
+        frame.rgb = Some(rgb);
+        Ok(frame)
+    }
+
+    /// The RGB pixels, when the frame has colour.
+    pub fn rgb(&self) -> Option<&'a [u8]> {
+        self.rgb
     }
 
     /// Width in pixels.

@@ -60,6 +60,7 @@ pub mod observation;
 pub mod particle;
 pub mod proposal;
 pub mod reacquire;
+pub mod region;
 pub mod space;
 pub mod tracker;
 
@@ -71,6 +72,7 @@ pub use error::{Error, Result};
 pub use frame::Frame;
 pub use observation::{ImplicitMotionSettings, LikelihoodSettings};
 pub use particle::Particle;
+pub use region::{RegionSettings, RegionTracker};
 pub use space::ShapeSpace;
 pub use tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, build};
 

@@ -100,6 +100,9 @@ pub trait Tracker: Send {
 /// # Errors
 /// An invalid configuration.
 pub fn build(config: TrackerConfig) -> Result<Box<dyn Tracker>> {
+    if config.region.is_some() {
+        return Ok(Box::new(crate::region::RegionTracker::new(config)?));
+    }
     Ok(Box::new(ParticleTracker::new(config)?))
 }
 

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
 use scene_synth::Scenario;
-use trackers::Preset;
+use trackers::{Preset, TrackerConfig};
 
 use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, Overrides, progress, tracker_config};
 use crate::evaluation::{
@@ -12,7 +12,7 @@ use crate::evaluation::{
     switching_scores, table1, table1_csv, table1_markdown,
 };
 use crate::groundtruth::{check_groundtruth_len, first_labelled, load_groundtruth};
-use crate::metrics::{SequenceMetrics, evaluate, mean_metrics};
+use crate::metrics::{SequenceMetrics, evaluate, mean_metrics, with_self_evaluation};
 use crate::output::write_atomic;
 use crate::sequence::{FrameSource, open_sequence};
 use crate::session::Session;
@@ -89,6 +89,10 @@ pub enum Evaluation {
         /// preset's, 8); see `track run --help`.
         #[arg(long)]
         edge_threshold: Option<f32>,
+        /// A tracker configuration file (JSON or TOML, as `track config PRESET` prints), run
+        /// beside the presets (repeatable).
+        #[arg(long = "config")]
+        configs: Vec<PathBuf>,
         /// Folder for otb.md and otb.csv.
         #[arg(long, default_value = "track-eval")]
         out: PathBuf,
@@ -231,6 +235,7 @@ pub fn run(args: &Args) -> Result<()> {
             sequences,
             run,
             edge_threshold,
+            configs,
             out,
             quiet,
         } => {
@@ -239,18 +244,34 @@ pub fn run(args: &Args) -> Result<()> {
                 particles,
                 seed,
             } = run;
-            let trackers = presets(trackers, &[Preset::Full])?;
+            let overrides = || Overrides {
+                particles: Some(*particles),
+                seed: Some(*seed),
+                parallel: false,
+                edge_threshold: *edge_threshold,
+            };
+            let default: &[Preset] = if configs.is_empty() {
+                &[Preset::Head]
+            } else {
+                &[]
+            };
+            let mut runs = Vec::new();
+            for p in presets(trackers, default)? {
+                runs.push(tracker_config(p.name(), None, overrides())?);
+            }
+            for path in configs {
+                runs.push(tracker_config("", Some(path), overrides())?);
+            }
             let mut rows: Vec<(String, String, SequenceMetrics)> = Vec::new();
-            for t in &trackers {
+            for config in &runs {
                 let mut per_tracker = Vec::new();
                 for dir in sequences {
-                    let m =
-                        evaluate_otb(dir, t.name(), *particles, *seed, *edge_threshold, *quiet)?;
-                    rows.push((sequence_name(dir), t.name().to_owned(), m.clone()));
+                    let m = evaluate_otb(dir, config, *quiet)?;
+                    rows.push((sequence_name(dir), config.name.clone(), m.clone()));
                     per_tracker.push(m);
                 }
                 if let Some(mean) = mean_metrics(&per_tracker) {
-                    rows.push(("mean".to_owned(), t.name().to_owned(), mean));
+                    rows.push(("mean".to_owned(), config.name.clone(), mean));
                 }
             }
             let md = otb_markdown(&rows);
@@ -269,14 +290,7 @@ fn sequence_name(dir: &Path) -> String {
 }
 
 /// Tracks one OTB folder from its first labelled box and scores it.
-fn evaluate_otb(
-    dir: &Path,
-    tracker: &str,
-    particles: usize,
-    seed: u64,
-    edge_threshold: Option<f32>,
-    quiet: bool,
-) -> Result<SequenceMetrics> {
+fn evaluate_otb(dir: &Path, config: &TrackerConfig, quiet: bool) -> Result<SequenceMetrics> {
     let spec = dir.to_string_lossy();
     let mut sequence = open_sequence(&spec)?;
     let gt_path = sequence.groundtruth.clone().ok_or_else(|| {
@@ -289,18 +303,10 @@ fn evaluate_otb(
         first_labelled(&truth).ok_or_else(|| AppError::input(&gt_path, "no labelled frame"))?;
     init_box.validate_in_frame(info.width, info.height, "the first ground-truth box")?;
     let init = init_box.inscribed_ellipse();
-    let config = tracker_config(
-        tracker,
-        None,
-        Overrides {
-            particles: Some(particles),
-            seed: Some(seed),
-            parallel: false,
-            edge_threshold,
-        },
-    )?;
+    let tracker = &config.name;
     let mut session = Session::new(
-        trackers::build(config).map_err(|e| AppError::setting("--tracker", e.to_string()))?,
+        trackers::build(config.clone())
+            .map_err(|e| AppError::setting("--tracker", e.to_string()))?,
         None,
     );
     let bar = progress(
@@ -317,25 +323,38 @@ fn evaluate_otb(
     bar.finish_and_clear();
     let output = session.finish();
     let boxes: Vec<_> = output.records.iter().map(|r| r.bbox).collect();
-    evaluate(
-        &boxes,
-        &truth[start..start + boxes.len()],
-        Some(output.seconds.max(1e-9)),
-    )
+    // The initialisation frame is given, not tracked: it is not scored (as in PEERS.md).
+    let mut scored = truth[start..start + boxes.len()].to_vec();
+    if let Some(first) = scored.first_mut() {
+        *first = None;
+    }
+    let p_lost: Vec<Option<f64>> = output
+        .records
+        .iter()
+        .map(|r| r.alpha_probs.get(LOST_INDEX).copied())
+        .collect();
+    let metrics = evaluate(&boxes, &scored, Some(output.seconds.max(1e-9)))?;
+    Ok(with_self_evaluation(metrics, &boxes, &scored, &p_lost))
 }
+
+/// Where P(lost) sits in a record's `alpha_probs` (locked, partially occluded, lost).
+const LOST_INDEX: usize = 2;
 
 fn otb_markdown(rows: &[(String, String, SequenceMetrics)]) -> String {
     let mut s = String::from(
-        "| Sequence | Tracker | Precision@20px | Success AUC | Mean IoU | Frames/s | Failed at |\n\
-         |---|---|---|---|---|---|---|\n",
+        "| Sequence | Tracker | Precision@20px | Success AUC | Mean IoU | Frames/s | Lost ROC AUC | Failed at |\n\
+         |---|---|---|---|---|---|---|---|\n",
     );
     for (seq, tracker, m) in rows {
         s.push_str(&format!(
-            "| {seq} | {tracker} | {:.3} | {:.3} | {:.3} | {:.1} | {} |\n",
+            "| {seq} | {tracker} | {:.3} | {:.3} | {:.3} | {:.1} | {} | {} |\n",
             m.precision_20,
             m.success_auc,
             m.mean_iou,
             m.fps.unwrap_or(0.0),
+            m.lost_auc
+                .map(|a| format!("{a:.3}"))
+                .unwrap_or_else(|| "—".into()),
             m.failed_at_frame
                 .map(|f| (f + 1).to_string())
                 .unwrap_or_else(|| "—".into())
@@ -346,17 +365,18 @@ fn otb_markdown(rows: &[(String, String, SequenceMetrics)]) -> String {
 
 fn otb_csv(rows: &[(String, String, SequenceMetrics)]) -> String {
     let mut s = String::from(
-        "sequence,tracker,frames,labelled,precision_20,success_auc,mean_iou,fps,failed_at\n",
+        "sequence,tracker,frames,labelled,precision_20,success_auc,mean_iou,fps,lost_auc,failed_at\n",
     );
     for (seq, tracker, m) in rows {
         s.push_str(&format!(
-            "{seq},{tracker},{},{},{:.4},{:.4},{:.4},{:.2},{}\n",
+            "{seq},{tracker},{},{},{:.4},{:.4},{:.4},{:.2},{},{}\n",
             m.frames,
             m.labelled_frames,
             m.precision_20,
             m.success_auc,
             m.mean_iou,
             m.fps.unwrap_or(0.0),
+            m.lost_auc.map(|a| format!("{a:.4}")).unwrap_or_default(),
             m.failed_at_frame
                 .map(|f| (f + 1).to_string())
                 .unwrap_or_default()

@@ -1,0 +1,476 @@
+//! The region tracker: a particle filter over an axis-aligned elliptical head (centre, log-scale,
+//! log-aspect) weighted by the colour log-ratio inside the contour and the contrast across it,
+//! with a lost/locked chain read from the estimate's colour and reacquisition over the whole frame
+//! while the target is believed lost.
+
+use std::time::Instant;
+
+use contour_obs::Ellipse;
+use dbn_switch::{Status, StatusEstimate};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+use smc_core::rng::{particle_rng, resampler_rng};
+use smc_core::weights::{effective_sample_size, normalize_log_weights};
+use smc_core::{Resampler, Systematic};
+
+use super::colour::{ColourBins, Histogram, log_ratios};
+use super::settings::RegionSettings;
+use super::status::LostChain;
+use super::window::WorkingWindow;
+use crate::config::TrackerConfig;
+use crate::frame::Frame;
+use crate::space::STATE_SLOTS;
+use crate::tracker::{Estimate, Tracker, WeightedEllipse};
+use crate::{Error, Result};
+
+/// Most working pixels read from one frame: while the target is lost the window is the whole
+/// frame, read coarser when needed to stay under this bound.
+const MAX_WINDOW_PIXELS: f64 = 160_000.0;
+/// Bisection steps of the tempering exponent.
+const TEMPER_STEPS: usize = 30;
+/// The outer ellipse of the background ring, in target half-axes.
+const RING_OUTER: f64 = 2.0;
+/// The inner ellipse of the background ring: a margin that the target's own pixels near its
+/// boundary do not reach.
+const RING_INNER: f64 = 1.25;
+/// Standard deviation of the log-scale of a particle drawn anywhere in the frame.
+const REACQUIRE_SCALE_SPREAD: f64 = 0.1;
+/// The outer ellipse of the contrast ring, in half-axes of the hypothesis.
+const CONTRAST_RING: f64 = 1.5;
+/// Spacing of the detection grid, in the target's geometric-mean half-axis.
+const DETECTION_STRIDE: f64 = 0.25;
+/// How far the long jumps reach, in `sigma_position`.
+const JUMP_FACTOR: f64 = 4.0;
+/// Strength of the pull of the log-aspect back to the initial aspect, per frame.
+const ASPECT_REVERSION: f64 = 0.05;
+
+/// One hypothesis: centre (full-resolution pixels), log-scale and log-aspect relative to the
+/// initial ellipse.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct Hypothesis {
+    cx: f64,
+    cy: f64,
+    log_scale: f64,
+    log_aspect: f64,
+}
+
+impl Hypothesis {
+    fn ellipse(&self, base: (f64, f64)) -> Ellipse {
+        let s = self.log_scale.exp();
+        let r = (0.5 * self.log_aspect).exp();
+        Ellipse {
+            cx: self.cx,
+            cy: self.cy,
+            a: base.0 * s * r,
+            b: base.1 * s / r,
+            theta: 0.0,
+        }
+    }
+}
+
+/// The state kept between frames.
+#[derive(Debug)]
+struct Track {
+    base: (f64, f64),
+    particles: Vec<Hypothesis>,
+    scratch: Vec<Hypothesis>,
+    weights: Vec<f64>,
+    estimate: Hypothesis,
+    velocity: [f64; 2],
+    /// The target's colour at the first frame, and as learnt since.
+    initial: Histogram,
+    target: Histogram,
+    background: Histogram,
+    chain: LostChain,
+    size: (usize, usize),
+}
+
+impl Track {
+    /// The target model the weights read: the first frame's colours and the learnt ones in
+    /// equal parts, so that learning follows slow changes without drifting onto the background.
+    /// With no learning the first frame's model alone.
+    fn model(&self, rate: f64) -> Histogram {
+        let mut m = self.initial.clone();
+        if rate > 0.0 {
+            m.blend(&self.target, 0.5);
+        }
+        m
+    }
+}
+
+/// The region tracker ([`crate::region`]).
+#[derive(Debug)]
+pub struct RegionTracker {
+    config: TrackerConfig,
+    settings: RegionSettings,
+    track: Option<Track>,
+    window: WorkingWindow,
+    ratios: Vec<f32>,
+    log_weights: Vec<f64>,
+    ancestors: Vec<usize>,
+    frame: usize,
+}
+
+impl RegionTracker {
+    /// A region tracker for `config`, whose `region` settings must be present.
+    ///
+    /// # Errors
+    /// An invalid configuration, or one without region settings.
+    pub fn new(config: TrackerConfig) -> Result<Self> {
+        config.validate()?;
+        let settings = config.region.ok_or(Error::InvalidSetting {
+            name: "region",
+            reason: "the region tracker needs region settings".into(),
+        })?;
+        Ok(Self {
+            config,
+            settings,
+            track: None,
+            window: WorkingWindow::default(),
+            ratios: Vec::new(),
+            log_weights: Vec::new(),
+            ancestors: Vec::new(),
+            frame: 0,
+        })
+    }
+
+    fn bins(&self, frame: &Frame<'_>) -> ColourBins {
+        let s = &self.settings;
+        if frame.rgb().is_some() {
+            ColourBins::colour(s.hs_bins, s.value_bins)
+        } else {
+            ColourBins::grey(2 * s.value_bins)
+        }
+    }
+
+    /// The window read around `centre` for a target of half-axes `(a, b)`, or the whole frame.
+    fn read_window(
+        &mut self,
+        frame: &Frame<'_>,
+        bins: &ColourBins,
+        centre: [f64; 2],
+        axes: (f64, f64),
+        whole: bool,
+    ) {
+        let (fw, fh) = (frame.width() as f64, frame.height() as f64);
+        let side = 2.0 * (axes.0 * axes.1).sqrt();
+        let mut step = (side / self.settings.working_size).max(1.0);
+        let rect = if whole {
+            [0.0, 0.0, fw, fh]
+        } else {
+            let (hx, hy) = (self.settings.search * axes.0, self.settings.search * axes.1);
+            [centre[0] - hx, centre[1] - hy, centre[0] + hx, centre[1] + hy]
+        };
+        let area = (rect[2].min(fw) - rect[0].max(0.0)) * (rect[3].min(fh) - rect[1].max(0.0));
+        step = step.max((area.max(0.0) / MAX_WINDOW_PIXELS).sqrt());
+        self.window.read(frame, bins, rect, step);
+    }
+
+    /// Colour histogram inside `e` (Epanechnikov-weighted, as Pérez et al.) and of the ring
+    /// around it, on the current window.
+    fn histograms(&self, bins: usize, e: &Ellipse) -> (Option<Histogram>, Option<Histogram>) {
+        let inside = self
+            .window
+            .counts(bins, Some(e), None, |r2| (1.0 - r2).max(0.0));
+        let outer = scaled(e, RING_OUTER);
+        let inner = scaled(e, RING_INNER);
+        let ring = self.window.counts(bins, Some(&outer), Some(&inner), |_| 1.0);
+        (Histogram::from_counts(inside), Histogram::from_counts(ring))
+    }
+}
+
+fn scaled(e: &Ellipse, k: f64) -> Ellipse {
+    Ellipse {
+        a: e.a * k,
+        b: e.b * k,
+        ..*e
+    }
+}
+
+fn bbox(e: &Ellipse) -> [f64; 4] {
+    [e.cx - e.a, e.cy - e.b, 2.0 * e.a, 2.0 * e.b]
+}
+
+fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    StandardNormal.sample(rng)
+}
+
+/// The exponent φ ∈ (0, 1] of the tempered weights `φ · log w`: 1 when the untempered weights
+/// keep an effective sample size of at least `min_ess`, else the largest φ that does (bisection).
+/// Normalises `log_weights` to the tempered log weights and fills `weights`.
+fn temper(log_weights: &mut [f64], weights: &mut Vec<f64>, min_ess: f64, step: u64) -> Result<f64> {
+    let raw = log_weights.to_vec();
+    let apply = |phi: f64, lw: &mut [f64], w: &mut Vec<f64>| -> Result<f64> {
+        for (t, r) in lw.iter_mut().zip(&raw) {
+            *t = phi * r;
+        }
+        normalize_log_weights(lw, w)
+            .map_err(|reason| Error::Smc(smc_core::Error::DegenerateWeights { step, reason }))?;
+        Ok(effective_sample_size(w))
+    };
+    if apply(1.0, log_weights, weights)? >= min_ess {
+        return Ok(1.0);
+    }
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..TEMPER_STEPS {
+        let mid = 0.5 * (lo + hi);
+        if apply(mid, log_weights, weights)? >= min_ess {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    apply(lo, log_weights, weights)?;
+    Ok(lo)
+}
+
+impl Tracker for RegionTracker {
+    fn name(&self) -> &str {
+        &self.config.name
+    }
+
+    fn config(&self) -> &TrackerConfig {
+        &self.config
+    }
+
+    fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate> {
+        let start = Instant::now();
+        let values = [ellipse.cx, ellipse.cy, ellipse.a, ellipse.b];
+        if values.iter().any(|v| !v.is_finite()) || !(ellipse.a > 0.0 && ellipse.b > 0.0) {
+            return Err(Error::InvalidSetting {
+                name: "initial ellipse",
+                reason: format!("{ellipse:?} must be finite with positive semi-axes"),
+            });
+        }
+        let e = Ellipse { theta: 0.0, ..ellipse };
+        let bins = self.bins(&frame);
+        self.read_window(&frame, &bins, [e.cx, e.cy], (e.a, e.b), false);
+        let (target, background) = self.histograms(bins.len(), &e);
+        let (Some(target), Some(background)) = (target, background) else {
+            return Err(Error::InvalidSetting {
+                name: "initial ellipse",
+                reason: format!("{ellipse:?} covers no pixel of the frame or has no surroundings"),
+            });
+        };
+        let estimate = Hypothesis {
+            cx: e.cx,
+            cy: e.cy,
+            log_scale: 0.0,
+            log_aspect: 0.0,
+        };
+        let n = self.config.particles;
+        let chain = LostChain::new(
+            self.settings.status_persistence,
+            target.bhattacharyya(&background),
+        );
+        self.track = Some(Track {
+            base: (e.a, e.b),
+            particles: vec![estimate; n],
+            scratch: Vec::with_capacity(n),
+            weights: vec![1.0 / n as f64; n],
+            estimate,
+            velocity: [0.0; 2],
+            initial: target.clone(),
+            target,
+            background,
+            chain,
+            size: (frame.width(), frame.height()),
+        });
+        self.frame = 0;
+        Ok(Estimate {
+            frame: 0,
+            ellipse: e,
+            bbox: bbox(&e),
+            state: [0.0; STATE_SLOTS],
+            ess: n as f64,
+            diagnostics: None,
+            clutter: None,
+            gamma: Some(0.0),
+            status: Some(StatusEstimate {
+                alpha_hat: Status::Locked,
+                alpha_probs: [1.0, 0.0, 0.0],
+                gamma_hat: 0.0,
+            }),
+            motion_clusters: (0, 0),
+            millis: start.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+
+    fn update(&mut self, frame: Frame<'_>) -> Result<Estimate> {
+        let start = Instant::now();
+        let mut track = self.track.take().ok_or(Error::NotInitialised)?;
+        let result = self.step(&mut track, &frame, start);
+        self.track = Some(track);
+        result
+    }
+
+    fn particles(&self, max: usize) -> Vec<WeightedEllipse> {
+        let Some(track) = &self.track else {
+            return Vec::new();
+        };
+        let mut all: Vec<WeightedEllipse> = track
+            .particles
+            .iter()
+            .zip(&track.weights)
+            .map(|(p, &w)| WeightedEllipse {
+                ellipse: p.ellipse(track.base),
+                weight: w,
+            })
+            .collect();
+        all.sort_by(|a, b| b.weight.total_cmp(&a.weight));
+        all.truncate(max);
+        all
+    }
+}
+
+impl RegionTracker {
+    fn step(&mut self, track: &mut Track, frame: &Frame<'_>, start: Instant) -> Result<Estimate> {
+        if (frame.width(), frame.height()) != track.size {
+            return Err(Error::BadFrame {
+                frame: self.frame + 1,
+                reason: format!(
+                    "{}x{} frame after {}x{} frames",
+                    frame.width(),
+                    frame.height(),
+                    track.size.0,
+                    track.size.1
+                ),
+            });
+        }
+        self.frame += 1;
+        let t = self.frame as u64;
+        let s = self.settings;
+        let seed = self.config.seed;
+        let p_lost = track.chain.p_lost();
+        let current = track.estimate.ellipse(track.base);
+        let sigma = s.sigma_position * (current.a * current.b).sqrt();
+        let (fw, fh) = (frame.width() as f64, frame.height() as f64);
+        let drift = [
+            s.velocity_retention * track.velocity[0],
+            s.velocity_retention * track.velocity[1],
+        ];
+        // Prediction: a random walk around the drifted state, a share of long jumps, and while
+        // the target is believed lost a share of draws anywhere in the frame.
+        // The window and its log-ratio integral image, read before the prediction: the best
+        // centre of the current ellipse in it is where the detection jumps land.
+        let bins = self.bins(frame);
+        let centre = [current.cx + drift[0], current.cy + drift[1]];
+        self.read_window(frame, &bins, centre, (current.a, current.b), p_lost > 0.5);
+        let target = track.model(s.target_rate);
+        log_ratios(&target, &track.background, &mut self.ratios);
+        self.window.integrate(&self.ratios);
+        let stride = DETECTION_STRIDE * (current.a * current.b).sqrt() / self.window.step();
+        let detection = self
+            .window
+            .best_centre((current.a, current.b), CONTRAST_RING, stride)
+            .map(|(c, _)| c);
+        let detect_share = s.detection_share.max(s.reacquire_share * p_lost);
+        track.scratch.clear();
+        for (i, p) in track.particles.iter().enumerate() {
+            let mut rng = particle_rng(seed, t, i);
+            let jump = rng.random::<f64>() < detect_share;
+            let q = if let (true, Some(d)) = (jump, detection) {
+                Hypothesis {
+                    cx: (d[0] + sigma * normal(&mut rng)).clamp(0.0, fw),
+                    cy: (d[1] + sigma * normal(&mut rng)).clamp(0.0, fh),
+                    log_scale: track.estimate.log_scale
+                        + REACQUIRE_SCALE_SPREAD * normal(&mut rng),
+                    log_aspect: track.estimate.log_aspect,
+                }
+            } else {
+                let k = if rng.random::<f64>() < s.jump_probability {
+                    JUMP_FACTOR
+                } else {
+                    1.0
+                };
+                Hypothesis {
+                    cx: (p.cx + drift[0] + k * sigma * normal(&mut rng)).clamp(0.0, fw),
+                    cy: (p.cy + drift[1] + k * sigma * normal(&mut rng)).clamp(0.0, fh),
+                    log_scale: p.log_scale + s.sigma_scale * normal(&mut rng),
+                    log_aspect: (1.0 - ASPECT_REVERSION) * p.log_aspect
+                        + s.sigma_aspect * normal(&mut rng),
+                }
+            };
+            track.scratch.push(q);
+        }
+        std::mem::swap(&mut track.particles, &mut track.scratch);
+
+        // Weights.
+        self.log_weights.clear();
+        for p in &track.particles {
+            let e = p.ellipse(track.base);
+            let mut lw = s.colour_weight * self.window.contrast(&e, CONTRAST_RING);
+            if s.gradient_weight > 0.0 {
+                lw += s.gradient_weight * self.window.edge_strength(&e);
+            }
+            self.log_weights.push(lw);
+        }
+        let n = track.particles.len();
+        temper(
+            &mut self.log_weights,
+            &mut track.weights,
+            s.min_ess_fraction * n as f64,
+            t,
+        )?;
+        let ess = effective_sample_size(&track.weights);
+
+        // The estimate: the weighted mean hypothesis.
+        let mut mean = Hypothesis::default();
+        for (p, &w) in track.particles.iter().zip(&track.weights) {
+            mean.cx += w * p.cx;
+            mean.cy += w * p.cy;
+            mean.log_scale += w * p.log_scale;
+            mean.log_aspect += w * p.log_aspect;
+        }
+        let e = mean.ellipse(track.base);
+        if ![e.cx, e.cy, e.a, e.b].iter().all(|v| v.is_finite()) {
+            return Err(Error::BadFrame {
+                frame: self.frame,
+                reason: "the estimated contour is not finite".into(),
+            });
+        }
+
+        // Status from the estimate's colour; model updates from locked frames only.
+        let (inside, ring) = self.histograms(bins.len(), &e);
+        let similarity = inside.as_ref().map_or(0.0, |h| h.bhattacharyya(&track.initial));
+        track.chain.update(similarity);
+        let p_lost = track.chain.p_lost();
+        if p_lost < 0.5 {
+            if let Some(ring) = &ring {
+                track.background.blend(ring, s.background_rate);
+            }
+            if let Some(inside) = &inside {
+                track.target.blend(inside, s.target_rate * (1.0 - 2.0 * p_lost));
+            }
+            track.velocity = [mean.cx - track.estimate.cx, mean.cy - track.estimate.cy];
+        } else {
+            track.velocity = [0.0; 2];
+        }
+        track.estimate = mean;
+
+        // Resampling (every frame, systematic).
+        let mut rng = resampler_rng(seed, t);
+        Systematic.resample(&track.weights, n, &mut rng, &mut self.ancestors)?;
+        track.scratch.clear();
+        track
+            .scratch
+            .extend(self.ancestors.iter().map(|&i| track.particles[i]));
+        std::mem::swap(&mut track.particles, &mut track.scratch);
+        track.weights.fill(1.0 / n as f64);
+
+        let status = track.chain.estimate();
+        Ok(Estimate {
+            frame: self.frame,
+            ellipse: e,
+            bbox: bbox(&e),
+            state: [0.0; STATE_SLOTS],
+            ess,
+            diagnostics: None,
+            clutter: None,
+            gamma: Some(status.gamma_hat),
+            status: Some(status),
+            motion_clusters: (0, 0),
+            millis: start.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+}
