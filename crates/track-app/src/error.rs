@@ -9,7 +9,9 @@ pub type Result<T, E = AppError> = std::result::Result<T, E>;
 ///
 /// Exit codes (also in `track --help`): 0 success, 1 a computation failed (for example the filter
 /// degenerated), 2 bad command-line arguments or settings, 3 bad input data (images, ground truth,
-/// video), 4 an output could not be written.
+/// video), 4 an output could not be written. A closed standard output ends a command quietly
+/// with 0; a run stopped by a signal exits with 128 + the signal number (130 for Ctrl-C, 143 for
+/// SIGTERM) after writing what it had computed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum AppError {
@@ -48,6 +50,25 @@ pub enum AppError {
     /// The command is not available yet.
     #[error("`track {0}` is not implemented yet")]
     NotImplemented(&'static str),
+    /// Standard output was closed by its reader (for example `track config full | head -c 10`):
+    /// the command stops quietly with exit 0, as Unix tools do.
+    #[error("standard output closed")]
+    StdoutClosed,
+    /// The run was stopped by a signal (Ctrl-C, SIGTERM) after writing what it had computed.
+    #[error(
+        "interrupted by {signal} after {frames} frames; the outputs of those frames are in {}",
+        out.display()
+    )]
+    Interrupted {
+        /// The signal's name (`SIGINT`, `SIGTERM`, …).
+        signal: &'static str,
+        /// The signal's number: the exit code is 128 + it, the shells' convention.
+        number: u8,
+        /// Frames tracked and written.
+        frames: usize,
+        /// The output folder.
+        out: PathBuf,
+    },
 }
 
 impl AppError {
@@ -58,6 +79,8 @@ impl AppError {
             AppError::InvalidSetting { .. } => 2,
             AppError::BadInput { .. } => 3,
             AppError::Write { .. } => 4,
+            AppError::StdoutClosed => 0,
+            AppError::Interrupted { number, .. } => 128u8.saturating_add(*number),
         }
     }
 

@@ -1,6 +1,29 @@
 //! The `track` command line. All logic lives in the `track_app` library so that tests can drive it
 //! in-process.
 
-fn main() -> std::process::ExitCode {
-    track_app::cli::main_from_args(std::env::args_os())
+use std::io::Write;
+use std::process::ExitCode;
+
+use clap::Parser;
+use track_app::AppError;
+use track_app::cli::{Cli, run};
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse_from(std::env::args_os()) {
+        Ok(cli) => cli,
+        // clap prints help, version and usage errors itself, with its own exit codes (0 or 2),
+        // and ignores a closed standard output.
+        Err(e) => e.exit(),
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        // The reader of standard output went away (`| head`): end quietly, as Unix tools do.
+        Err(AppError::StdoutClosed) => ExitCode::SUCCESS,
+        Err(e) => {
+            // `eprintln!` would panic if standard error were closed too; there is nowhere left to
+            // report that, so only the exit code tells.
+            let _ = writeln!(std::io::stderr(), "error: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
 }

@@ -11,8 +11,13 @@
 //!   would cost about 0.5 MB per 320×240 frame (grey `f32` plus RGB), 1 GB for 2,000 frames;
 //! - a Y4M file is read through once without conversion (header, every `FRAME` line, exact plane
 //!   sizes), then reopened;
-//! - Y4M on standard input cannot be read twice, so it is buffered in memory as raw bytes
-//!   (1.5 bytes per pixel in 4:2:0, 57 kB per 320×240 frame) when the source is opened.
+//! - Y4M on standard input cannot be read twice and is not kept: it is a *stream*
+//!   ([`FrameSource::is_stream`]), read one frame at a time in constant memory, and each frame is
+//!   checked as it arrives. Its frame size is known from the header ([`Y4mSource::header`]).
+//!
+//! Sizes are checked before anything is allocated: a Y4M header may not claim frames wider or
+//! taller than [`MAX_SIDE`] pixels or larger than [`MAX_PIXELS`] (a 4.6 kB file whose header says
+//! `W4000000 H4000000` would otherwise ask for 24 TB).
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Cursor, Read};
@@ -103,8 +108,16 @@ pub trait FrameSource {
     /// frame size. Does not move this source's reading position.
     ///
     /// # Errors
-    /// The first error [`FrameSource::next_frame`] would meet, or an empty sequence.
+    /// The first error [`FrameSource::next_frame`] would meet, or an empty sequence;
+    /// [`AppError::BadInput`] for a stream ([`FrameSource::is_stream`]), which cannot be read
+    /// twice.
     fn validate_all(&self) -> Result<SequenceInfo>;
+
+    /// Whether the source is a stream (Y4M on standard input) that can be read only once: it has
+    /// no [`FrameSource::validate_all`], and each frame is checked as it is read.
+    fn is_stream(&self) -> bool {
+        false
+    }
 }
 
 /// What a pre-scan learnt about a sequence.
@@ -266,6 +279,9 @@ fn decode_image(path: &Path) -> Result<image::DynamicImage> {
                 "truncated image".to_string()
             }
             image::ImageError::Unsupported(_) => format!("unsupported image: {e}"),
+            image::ImageError::Limits(_) => {
+                format!("image too large: the decoder's memory limit refuses it ({e})")
+            }
             _ => {
                 let text = e.to_string();
                 if text.to_ascii_lowercase().contains("eof")
@@ -325,6 +341,12 @@ impl FrameSource for ImageFolder {
 
 // ---------------------------------------------------------------------------------------------
 // Y4M.
+
+/// Largest frame width or height accepted from a Y4M header, pixels.
+pub const MAX_SIDE: usize = 32_768;
+/// Largest frame area accepted from a Y4M header, pixels: 2²⁶ (8192×8192, twice 8K UHD). One frame
+/// of that size takes about 1.3 GB through reading, conversion, tracking and drawing.
+pub const MAX_PIXELS: usize = 1 << 26;
 
 /// Chroma layouts of Y4M that can be read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -419,12 +441,25 @@ impl Y4mHeader {
             }
         }
         match (width, height) {
-            (Some(width), Some(height)) => Ok(Self {
-                width,
-                height,
-                colour,
-                frame_rate,
-            }),
+            (Some(width), Some(height)) => {
+                // Checked before any buffer is sized from the header.
+                let pixels = width.checked_mul(height).unwrap_or(usize::MAX);
+                if width > MAX_SIDE || height > MAX_SIDE || pixels > MAX_PIXELS {
+                    return Err(AppError::input(
+                        name,
+                        format!(
+                            "Y4M frame size {width}×{height} is too large (at most {MAX_SIDE} \
+                             pixels a side and {MAX_PIXELS} pixels a frame)"
+                        ),
+                    ));
+                }
+                Ok(Self {
+                    width,
+                    height,
+                    colour,
+                    frame_rate,
+                })
+            }
             _ => Err(AppError::input(name, "bad Y4M header: missing W or H")),
         }
     }
@@ -548,15 +583,17 @@ fn convert_frame(header: &Y4mHeader, raw: &[u8]) -> (GrayFrame, Original) {
     (gray, Original::Rgb(rgb))
 }
 
-/// Where a Y4M stream's bytes are, so that it can be read again by the pre-scan.
+/// Where a Y4M stream's bytes are: a file or bytes in memory can be read again by the pre-scan;
+/// a stream (standard input) cannot.
 #[derive(Debug, Clone)]
 enum Y4mInput {
     File(PathBuf),
     Memory(Arc<[u8]>),
+    Stream,
 }
 
 impl Y4mInput {
-    fn reader(&self) -> Result<Box<dyn BufRead + Send>> {
+    fn reader(&self, name: &Path) -> Result<Box<dyn BufRead + Send>> {
         match self {
             Y4mInput::File(path) => {
                 let f = File::open(path)
@@ -564,6 +601,10 @@ impl Y4mInput {
                 Ok(Box::new(BufReader::with_capacity(1 << 16, f)))
             }
             Y4mInput::Memory(bytes) => Ok(Box::new(Cursor::new(Arc::clone(bytes)))),
+            Y4mInput::Stream => Err(AppError::input(
+                name,
+                "a stream can be read only once: it cannot be pre-scanned",
+            )),
         }
     }
 }
@@ -598,39 +639,54 @@ impl Y4mSource {
         let len_bytes = std::fs::metadata(path)
             .map_err(|e| AppError::input(path, format!("cannot open: {e}")))?
             .len();
-        Self::from_input(Y4mInput::File(path.to_path_buf()), path, len_bytes)
+        let input = Y4mInput::File(path.to_path_buf());
+        let reader = input.reader(path)?;
+        Self::from_input(input, reader, path, Some(len_bytes))
     }
 
-    /// Reads a whole Y4M stream from `reader` (for example standard input) into memory and reads
-    /// its header; `name` is used in messages (`-` for standard input).
+    /// A Y4M stream read from `reader` (for example standard input) one frame at a time, in
+    /// constant memory; reads its header now. `name` is used in messages (`-` for standard
+    /// input). A stream cannot be pre-scanned ([`FrameSource::is_stream`]).
     ///
     /// # Errors
-    /// [`AppError::BadInput`]: read failure, bad header, unsupported colour space.
-    pub fn from_reader(mut reader: impl Read, name: &Path) -> Result<Self> {
-        let mut bytes = Vec::new();
-        reader
-            .read_to_end(&mut bytes)
-            .map_err(|e| AppError::input(name, format!("cannot read: {e}")))?;
-        let len_bytes = bytes.len() as u64;
-        Self::from_input(Y4mInput::Memory(bytes.into()), name, len_bytes)
+    /// [`AppError::BadInput`]: read failure, bad header, unsupported colour space, frame size
+    /// too large.
+    pub fn from_reader(reader: impl Read + Send + 'static, name: &Path) -> Result<Self> {
+        let reader = Box::new(BufReader::with_capacity(1 << 16, reader));
+        Self::from_input(Y4mInput::Stream, reader, name, None)
     }
 
-    /// Reads Y4M from standard input (see [`Y4mSource::from_reader`]).
+    /// A Y4M video held in memory (it can be pre-scanned, unlike [`Y4mSource::from_reader`]).
+    ///
+    /// # Errors
+    /// As [`Y4mSource::from_reader`].
+    pub fn from_bytes(bytes: Vec<u8>, name: &Path) -> Result<Self> {
+        let len_bytes = bytes.len() as u64;
+        let input = Y4mInput::Memory(bytes.into());
+        let reader = input.reader(name)?;
+        Self::from_input(input, reader, name, Some(len_bytes))
+    }
+
+    /// Y4M from standard input, streamed (see [`Y4mSource::from_reader`]).
     ///
     /// # Errors
     /// As [`Y4mSource::from_reader`].
     pub fn stdin() -> Result<Self> {
-        Self::from_reader(std::io::stdin().lock(), Path::new("-"))
+        Self::from_reader(std::io::stdin(), Path::new("-"))
     }
 
-    fn from_input(input: Y4mInput, name: &Path, len_bytes: u64) -> Result<Self> {
-        let mut reader = input.reader()?;
+    fn from_input(
+        input: Y4mInput,
+        mut reader: Box<dyn BufRead + Send>,
+        name: &Path,
+        len_bytes: Option<u64>,
+    ) -> Result<Self> {
         let (header, header_len) = read_header(&mut reader, name)?;
         // The frame count is known when every frame line is a bare `FRAME\n` (the usual case):
         // then the bytes after the header are a whole number of frames.
         let per_frame = (header.frame_bytes() + 6) as u64;
         let len = len_bytes
-            .checked_sub(header_len as u64)
+            .and_then(|b| b.checked_sub(header_len as u64))
             .filter(|rest| rest % per_frame == 0)
             .map(|rest| (rest / per_frame) as usize);
         Ok(Self {
@@ -687,8 +743,12 @@ impl FrameSource for Y4mSource {
         }))
     }
 
+    fn is_stream(&self) -> bool {
+        matches!(self.input, Y4mInput::Stream)
+    }
+
     fn validate_all(&self) -> Result<SequenceInfo> {
-        let mut reader = self.input.reader()?;
+        let mut reader = self.input.reader(&self.name)?;
         read_header(&mut reader, &self.name)?;
         let mut buf = Vec::with_capacity(self.header.frame_bytes());
         let mut frames = 0;
@@ -753,6 +813,23 @@ impl FrameSource for Source {
         match self {
             Source::Images(s) => s.validate_all(),
             Source::Y4m(s) => s.validate_all(),
+        }
+    }
+
+    fn is_stream(&self) -> bool {
+        match self {
+            Source::Images(s) => s.is_stream(),
+            Source::Y4m(s) => s.is_stream(),
+        }
+    }
+}
+
+impl Source {
+    /// The frame size `(width, height)` when it is known without reading a frame (a Y4M header).
+    pub fn frame_size(&self) -> Option<(usize, usize)> {
+        match self {
+            Source::Images(_) => None,
+            Source::Y4m(s) => Some((s.header.width, s.header.height)),
         }
     }
 }
@@ -1047,9 +1124,21 @@ mod tests {
             frames[1].original.to_rgb().get_pixel(0, 0).0,
             [240, 29, 100]
         );
-        let src = Y4mSource::from_reader(Cursor::new(bytes), Path::new("-")).unwrap();
+        let src = Y4mSource::from_bytes(bytes.clone(), Path::new("v.y4m")).unwrap();
         assert_eq!(src.header().frame_rate, Some((25, 1)));
         assert_eq!(src.validate_all().unwrap().frames, 2);
+        // A stream is read once, frame by frame, and has no pre-scan.
+        let mut stream = Y4mSource::from_reader(Cursor::new(bytes), Path::new("-")).unwrap();
+        assert!(stream.is_stream() && !src.is_stream());
+        assert_eq!(stream.len(), None);
+        let msg = stream.validate_all().unwrap_err().to_string();
+        assert!(msg.contains("cannot be pre-scanned"), "{msg}");
+        let streamed = read_all(&mut stream).unwrap();
+        assert_eq!(streamed.len(), 2);
+        for (a, b) in streamed.iter().zip(&frames) {
+            assert_eq!((&a.gray, &a.original), (&b.gray, &b.original));
+        }
+        assert_eq!(streamed[1].name, "-#2");
     }
 
     #[test]
@@ -1131,17 +1220,45 @@ mod tests {
         assert!(src.next_frame().unwrap().is_some());
         assert!(src.next_frame().is_err());
         let bytes = b"YUV4MPEG2 W1 H1 Cmono\nFRAME\n\x05FRAMX\n\x06".to_vec();
-        let src = Y4mSource::from_reader(Cursor::new(bytes), Path::new("v.y4m")).unwrap();
+        let src = Y4mSource::from_bytes(bytes, Path::new("v.y4m")).unwrap();
         let msg = src.validate_all().unwrap_err().to_string();
         assert!(msg.contains("frame 2 does not start with FRAME"), "{msg}");
-        let src =
-            Y4mSource::from_reader(Cursor::new(b"YUV4MPEG2 W1 H1\n".to_vec()), Path::new("e"))
-                .unwrap();
+        let src = Y4mSource::from_bytes(b"YUV4MPEG2 W1 H1\n".to_vec(), Path::new("e")).unwrap();
         assert!(
             src.validate_all()
                 .unwrap_err()
                 .to_string()
                 .contains("no frame")
         );
+    }
+
+    #[test]
+    fn y4m_sizes_that_cannot_fit_are_refused_before_reading_a_frame() {
+        for (header, what) in [
+            ("YUV4MPEG2 W4000000 H4000000 C420jpeg", "4000000×4000000"),
+            ("YUV4MPEG2 W32769 H2 Cmono", "32769×2"),
+            ("YUV4MPEG2 W16384 H16384", "16384×16384"),
+            // The product overflows 64 bits.
+            (
+                "YUV4MPEG2 W18446744073709551615 H3",
+                "18446744073709551615×3",
+            ),
+        ] {
+            let mut bytes = format!("{header}\nFRAME\n").into_bytes();
+            bytes.extend_from_slice(&[0; 4096]);
+            let err = Y4mSource::from_reader(Cursor::new(bytes), Path::new("big.y4m")).unwrap_err();
+            let msg = err.to_string();
+            assert!(
+                msg.starts_with("big.y4m: Y4M frame size") && msg.contains(what),
+                "{msg}"
+            );
+            assert!(msg.contains("too large"), "{msg}");
+            assert_eq!(err.exit_code(), 3);
+        }
+        // The largest accepted sizes are accepted (the header alone, no frame).
+        for header in ["YUV4MPEG2 W8192 H8192", "YUV4MPEG2 W32768 H2048"] {
+            let src = Y4mSource::from_bytes(format!("{header}\n").into_bytes(), Path::new("h"));
+            assert!(src.is_ok(), "{header}");
+        }
     }
 }

@@ -37,6 +37,5 @@ pub fn run(args: &Args) -> Result<()> {
     } else {
         serde_json::to_string_pretty(&config).map_err(|e| AppError::computation("JSON", e))?
     };
-    println!("{text}");
-    Ok(())
+    crate::output::println_stdout(&text)
 }

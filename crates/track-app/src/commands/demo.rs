@@ -153,21 +153,19 @@ pub fn run(args: &Args) -> Result<()> {
     )?;
     write_summary(&args.out.join("summary.json"), &summary)?;
     if !args.quiet {
-        println!(
-            "track demo: {} frames of the synthetic `{}` scene tracked by `{}` at {:.1} frames/s",
+        crate::output::print_stdout(&format!(
+            "track demo: {} frames of the synthetic `{}` scene tracked by `{}` at {:.1} frames/s\n\
+             \x20 mean IoU {:.3}, precision@20px {:.3}, success AUC {:.3}\n\
+             \x20 open {} (overlays, plots, metrics)\n",
             records.len(),
             seq.name,
             config.name,
-            summary.fps
-        );
-        println!(
-            "  mean IoU {:.3}, precision@20px {:.3}, success AUC {:.3}",
-            metrics.mean_iou, metrics.precision_20, metrics.success_auc
-        );
-        println!(
-            "  open {} (overlays, plots, metrics)",
+            summary.fps,
+            metrics.mean_iou,
+            metrics.precision_20,
+            metrics.success_auc,
             args.out.join("report.html").display()
-        );
+        ))?;
     }
     Ok(())
 }

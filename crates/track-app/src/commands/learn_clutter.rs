@@ -34,6 +34,10 @@ pub struct Args {
     pub out: Option<PathBuf>,
 }
 
+/// Largest `--lines`: 500 times the default; the densities alone take 8 bytes a line (80 MB), and
+/// a larger sample does not change three cluster means measurably.
+pub const MAX_LINES: usize = 10_000_000;
+
 /// Runs `track learn-clutter`: writes `{"clusters": [{"mean", "std", "weight"}, …]}` sorted by
 /// mean, densities in edges per pixel.
 ///
@@ -42,6 +46,16 @@ pub struct Args {
 /// small image, [`AppError::Computation`] when clustering fails (for example fewer distinct
 /// densities than k), [`AppError::Write`] when the output cannot be written.
 pub fn run(args: &Args) -> Result<()> {
+    if args.lines > MAX_LINES {
+        return Err(AppError::setting(
+            "--lines",
+            format!("{} is more than the maximum, {MAX_LINES}", args.lines),
+        ));
+    }
+    if let Some(path) = &args.out {
+        // Refused before the work, not after it.
+        crate::output::check_replaceable(path)?;
+    }
     let settings = ClutterSettings {
         lines: args.lines,
         k: args.k,
@@ -78,10 +92,7 @@ pub fn run(args: &Args) -> Result<()> {
     json.push('\n');
     match &args.out {
         Some(path) => crate::output::write_atomic(path, json.as_bytes()),
-        None => {
-            print!("{json}");
-            Ok(())
-        }
+        None => crate::output::print_stdout(&json),
     }
 }
 

@@ -148,8 +148,7 @@ pub fn run(args: &Args) -> Result<()> {
     } else {
         to_text(&est, millis)
     };
-    println!("{out}");
-    Ok(())
+    crate::output::println_stdout(&out)
 }
 
 /// The JSON object of the issue: model, params, covariance (row-major), origin, scale,
