@@ -290,6 +290,20 @@ pub struct Summary {
     pub metrics: Option<SequenceMetrics>,
     /// The files written, relative to the output folder.
     pub outputs: Vec<String>,
+    /// Set when the run stopped before the end of its input (a signal, or an error in a stream):
+    /// the outputs then hold the frames tracked until then, and only those.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<Interruption>,
+}
+
+/// Why and where a run stopped early (see [`Summary::interrupted`]).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Interruption {
+    /// What stopped it: a signal's name (`SIGINT`, `SIGTERM`) or the error's message.
+    pub reason: String,
+    /// Frames read from the input before it stopped (tracked frames are in
+    /// [`Summary::frames`]).
+    pub frames_read: usize,
 }
 
 impl Summary {
@@ -489,6 +503,7 @@ mod tests {
             initial_box: Some(Box2::new(128.0, 46.0, 104.0, 127.0)),
             status_counts: Some([500, 2, 0]),
             outputs: vec!["track.csv".into()],
+            interrupted: None,
             ..Default::default()
         };
         write_summary(&path, &s).unwrap();

@@ -83,6 +83,12 @@ pub fn summary_rows(s: &Summary) -> Vec<(String, String)> {
         ("frames/s".to_string(), format!("{:.1}", s.fps)),
         ("ms/frame".to_string(), format!("{:.2}", s.mean_millis)),
     ];
+    if let Some(i) = &s.interrupted {
+        rows.push((
+            "interrupted".into(),
+            format!("{} after {} frames read", i.reason, i.frames_read),
+        ));
+    }
     if let Some([l, p, o]) = s.status_counts {
         rows.push((
             "frames locked / partial / lost".into(),

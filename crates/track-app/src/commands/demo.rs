@@ -125,6 +125,7 @@ pub fn run(args: &Args) -> Result<()> {
         status_counts: status_counts(records),
         metrics: Some(metrics.clone()),
         outputs: written,
+        interrupted: None,
     };
     let strip = strip_indices(output.overlays.len(), STRIP_FRAMES)
         .into_iter()

@@ -37,6 +37,8 @@ pub struct Args {
 /// Largest `--lines`: 500 times the default; the densities alone take 8 bytes a line (80 MB), and
 /// a larger sample does not change three cluster means measurably.
 pub const MAX_LINES: usize = 10_000_000;
+/// Largest `--k`: Wu §6.1 uses three classes; k-means++ costs k passes over the lines.
+pub const MAX_K: usize = 64;
 
 /// Runs `track learn-clutter`: writes `{"clusters": [{"mean", "std", "weight"}, …]}` sorted by
 /// mean, densities in edges per pixel.
@@ -50,6 +52,12 @@ pub fn run(args: &Args) -> Result<()> {
         return Err(AppError::setting(
             "--lines",
             format!("{} is more than the maximum, {MAX_LINES}", args.lines),
+        ));
+    }
+    if args.k > MAX_K {
+        return Err(AppError::setting(
+            "--k",
+            format!("{} is more than the maximum, {MAX_K}", args.k),
         ));
     }
     if let Some(path) = &args.out {

@@ -2,6 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
+use image::RgbImage;
 use indicatif::{ProgressBar, ProgressStyle};
 use trackers::{Preset, TrackerConfig};
 
@@ -12,10 +13,16 @@ use crate::groundtruth::{
 use crate::metrics::{SequenceMetrics, evaluate};
 use crate::output::write_atomic;
 use crate::plots::{all_figures, write_figures};
-use crate::record::{FrameRecord, Summary, TrackerStatus, status_counts, write_csv, write_summary};
+use crate::record::{
+    FrameRecord, Interruption, Summary, TrackerStatus, status_counts, write_csv, write_summary,
+};
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
 use crate::sequence::{FrameSource, open_sequence};
+use thinned::Thinned;
+
+mod signals;
+mod thinned;
 use crate::session::{ColourBy, DrawOptions, Session};
 use crate::{AppError, Result};
 
@@ -188,10 +195,72 @@ pub fn progress(len: u64, quiet: bool, what: &str) -> ProgressBar {
     bar
 }
 
-/// Runs `track run`.
+/// The files `track run` writes in `--out`, besides `overlay/NNNN.png` and `plots/*.svg`. At the
+/// start of a run, after its inputs are checked, the previous run's files of these names are
+/// removed, so a folder never mixes two runs.
+pub const OUTPUT_FILES: [&str; 5] = [
+    "track.csv",
+    "boxes.txt",
+    "summary.json",
+    "track.gif",
+    "report.html",
+];
+
+/// Prepares `--out` before tracking: creates it, refuses it if it is not a folder or cannot be
+/// written to, and removes the outputs of an earlier run (the files of [`OUTPUT_FILES`], the
+/// overlays `overlay/<digits>.png` and the plots `plots/*.svg`); anything else is left alone.
 ///
 /// # Errors
-/// See [`AppError`]; every input problem is found before anything is written.
+/// [`AppError::Write`] naming the folder or the file: not a folder, not writable, or an output
+/// name taken by something other than a regular file (a FIFO, a symbolic link, a folder).
+pub fn prepare_out(out: &Path) -> Result<()> {
+    crate::output::probe_dir(out)?;
+    for name in OUTPUT_FILES {
+        crate::output::remove_output(&out.join(name))?;
+    }
+    let ours = |sub: &str, keep: &dyn Fn(&Path) -> bool| -> Result<()> {
+        let dir = out.join(sub);
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            return Ok(());
+        };
+        for entry in entries.flatten() {
+            let path = entry.path();
+            if keep(&path) {
+                crate::output::remove_output(&path)?;
+            }
+        }
+        Ok(())
+    };
+    let ext_is = |p: &Path, ext: &str| p.extension().is_some_and(|e| e == ext);
+    ours("overlay", &|p| {
+        ext_is(p, "png")
+            && p.file_stem()
+                .and_then(|s| s.to_str())
+                .is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
+    })?;
+    ours("plots", &|p| ext_is(p, "svg"))?;
+    Ok(())
+}
+
+/// What one frame read from the sequence produced: the reader runs on its own thread, one frame
+/// ahead, so a signal is noticed even while standard input is waiting for data.
+type Incoming = Result<Option<crate::sequence::Frame>>;
+
+/// How long the run waits for the next frame before checking for a signal again.
+const POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// Runs `track run`.
+///
+/// Inputs are checked before anything is written: a folder or a `.y4m` file is pre-scanned
+/// whole; Y4M on standard input is a stream, read and checked one frame at a time in constant
+/// memory (its header is checked first). Then `--out` is prepared ([`prepare_out`]) and the
+/// frames are tracked, overlays written as they come. Ctrl-C or SIGTERM, or an error in a
+/// stream, stops the run after the current frame: `track.csv`, `boxes.txt`, `summary.json` (with
+/// `"interrupted"`) and the other outputs asked for are written for the frames tracked so far,
+/// and the run exits with 128 + the signal number (or the error's code).
+///
+/// # Errors
+/// See [`AppError`].
 pub fn run(args: &Args) -> Result<()> {
     let config = tracker_config(
         &args.tracker,
@@ -203,30 +272,39 @@ pub fn run(args: &Args) -> Result<()> {
             edge_threshold: args.edge_threshold,
         },
     )?;
-    let mut sequence = open_sequence(&args.sequence)?;
-    let info = sequence.source.validate_all()?;
-    let truth = match &sequence.groundtruth {
-        Some(path) => {
+    let sequence = open_sequence(&args.sequence)?;
+    let (known_frames, width, height) = if sequence.source.is_stream() {
+        let (w, h) = sequence
+            .source
+            .frame_size()
+            .ok_or_else(|| AppError::input(&args.sequence, "a stream without a frame size"))?;
+        (None, w, h)
+    } else {
+        let info = sequence.source.validate_all()?;
+        (Some(info.frames), info.width, info.height)
+    };
+    let truth = match (&sequence.groundtruth, known_frames) {
+        (Some(path), Some(frames)) => {
             let t = load_groundtruth(path)?;
-            check_groundtruth_len(&t, info.frames, path)?;
+            check_groundtruth_len(&t, frames, path)?;
             Some(t)
         }
-        None => None,
+        _ => None,
     };
     let (start, init) = match (args.init, args.init_ellipse, &truth) {
         (Some(b), _, _) => {
-            b.validate_in_frame(info.width, info.height, "--init")?;
+            b.validate_in_frame(width, height, "--init")?;
             (0, b.inscribed_ellipse())
         }
         (None, Some(e), _) => {
             e.bounding_box()
-                .validate_in_frame(info.width, info.height, "--init-ellipse")?;
+                .validate_in_frame(width, height, "--init-ellipse")?;
             (0, e)
         }
         (None, None, Some(t)) => {
             let (k, b) = first_labelled(t)
                 .ok_or_else(|| AppError::setting("--init", "the ground truth labels no frame"))?;
-            b.validate_in_frame(info.width, info.height, "the first ground-truth box")?;
+            b.validate_in_frame(width, height, "the first ground-truth box")?;
             (k, b.inscribed_ellipse())
         }
         (None, None, None) => {
@@ -236,27 +314,65 @@ pub fn run(args: &Args) -> Result<()> {
             ));
         }
     };
+    let tracker = trackers::build(config.clone())
+        .map_err(|e| AppError::setting("--tracker", e.to_string()))?;
+    // Everything the run reads is checked; now the output folder, before any tracking.
+    prepare_out(&args.out)?;
+    let signals = signals::StopSignals::install()?;
 
     let draw = (args.overlay || args.gif || args.report).then(|| DrawOptions {
         colour_by: args.colour_by,
         ..DrawOptions::default()
     });
-    let mut session = Session::new(
-        trackers::build(config.clone())
-            .map_err(|e| AppError::setting("--tracker", e.to_string()))?,
-        draw,
+    let mut session = Session::new(tracker, draw);
+    // With a known length the GIF takes every k-th overlay and the strip fixed frames, as
+    // before; a stream keeps evenly spaced frames in bounded memory ([`Thinned`]).
+    let mut gif = Thinned::new(
+        GIF_MAX_FRAMES,
+        known_frames.map_or(1, |n| n.div_ceil(GIF_MAX_FRAMES)),
     );
-    let gif_every = info.frames.div_ceil(GIF_MAX_FRAMES).max(1);
-    let strip = strip_indices(info.frames - start, STRIP_FRAMES);
-    let mut gif_frames = Vec::new();
-    let mut strip_frames = Vec::new();
+    let strip_known = known_frames.map(|n| strip_indices(n - start, STRIP_FRAMES));
+    let mut strip = Thinned::new(2 * STRIP_FRAMES, 1);
     let mut written = Vec::new();
-    let bar = progress(
-        info.frames as u64,
-        args.quiet,
-        &format!("{} on {}", config.name, sequence.name),
-    );
-    while let Some(frame) = sequence.source.next_frame()? {
+    let bar = match known_frames {
+        Some(n) => progress(n as u64, args.quiet, ""),
+        None => stream_progress(args.quiet),
+    };
+    bar.set_message(format!("{} on {}", config.name, sequence.name));
+
+    let (tx, rx) = std::sync::mpsc::sync_channel::<Incoming>(1);
+    let mut source = sequence.source;
+    let reader = std::thread::spawn(move || {
+        loop {
+            let next = source.next_frame();
+            let done = !matches!(next, Ok(Some(_)));
+            if tx.send(next).is_err() || done {
+                break;
+            }
+        }
+    });
+    let mut frames_read = 0;
+    let mut stop: Option<AppError> = None;
+    loop {
+        if let Some((name, number)) = signals.received() {
+            stop = Some(AppError::Interrupted {
+                signal: name,
+                number,
+                frames: 0,
+                out: args.out.clone(),
+            });
+            break;
+        }
+        let frame = match rx.recv_timeout(POLL) {
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => continue,
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) | Ok(Ok(None)) => break,
+            Ok(Err(e)) => {
+                stop = Some(e);
+                break;
+            }
+            Ok(Ok(Some(frame))) => frame,
+        };
+        frames_read += 1;
         bar.inc(1);
         if frame.index < start {
             continue;
@@ -264,7 +380,10 @@ pub fn run(args: &Args) -> Result<()> {
         let gt = truth
             .as_ref()
             .and_then(|t| t.get(frame.index).copied().flatten());
-        session.push(&frame, &init, gt)?;
+        if let Err(e) = session.push(&frame, &init, gt) {
+            stop = Some(e);
+            break;
+        }
         if let Some(img) = session.take_overlay() {
             let k = frame.index - start;
             if args.overlay {
@@ -272,17 +391,57 @@ pub fn run(args: &Args) -> Result<()> {
                 write_png(&args.out.join(&name), &img)?;
                 written.push(name);
             }
-            if args.gif && k % gif_every == 0 {
-                gif_frames.push(img.clone());
+            if args.report {
+                let label = format!("frame {}", frame.index + 1);
+                match &strip_known {
+                    Some(ks) if ks.contains(&k) => strip.push(k, (label, thumbnail(&img, 200))),
+                    Some(_) => {}
+                    None if strip.wants(k) => strip.push(k, (label, thumbnail(&img, 200))),
+                    None => {}
+                }
             }
-            if args.report && strip.contains(&k) {
-                strip_frames.push((format!("frame {}", frame.index + 1), thumbnail(&img, 200)));
+            if args.gif {
+                gif.push(k, img);
             }
         }
     }
     bar.finish_and_clear();
+    drop(rx);
+    if stop.is_none() {
+        // The reader has ended (end of input or error already received); it never blocks here.
+        let _ = reader.join();
+    }
+    // A signal that arrived while the last frames were read still marks the run as interrupted.
+    if stop.is_none()
+        && let Some((name, number)) = signals.received()
+    {
+        stop = Some(AppError::Interrupted {
+            signal: name,
+            number,
+            frames: 0,
+            out: args.out.clone(),
+        });
+    }
     let output = session.finish();
     let records = output.records;
+    if records.is_empty() {
+        return Err(stop.unwrap_or_else(|| {
+            AppError::input(
+                &args.sequence,
+                "no frame to track after the first labelled one",
+            )
+        }));
+    }
+    if let Some(AppError::Interrupted { frames, .. }) = &mut stop {
+        *frames = records.len();
+    }
+    let interrupted = stop.as_ref().map(|e| Interruption {
+        reason: match e {
+            AppError::Interrupted { signal, .. } => (*signal).to_owned(),
+            other => other.to_string(),
+        },
+        frames_read,
+    });
 
     write_csv(&args.out.join("track.csv"), &records)?;
     write_atomic(
@@ -291,10 +450,12 @@ pub fn run(args: &Args) -> Result<()> {
     )?;
     written.extend(["track.csv".to_owned(), "boxes.txt".to_owned()]);
     if args.gif {
+        let every = gif.stride();
+        let frames: Vec<RgbImage> = gif.into_items().into_iter().map(|(_, f)| f).collect();
         write_gif(
             &args.out.join("track.gif"),
-            &gif_frames,
-            1000 / 12 * gif_every as u32,
+            &frames,
+            1000 / 12 * every as u32,
         )?;
         written.push("track.gif".into());
     }
@@ -321,8 +482,8 @@ pub fn run(args: &Args) -> Result<()> {
         particles: config.particles,
         seed: config.seed,
         frames: records.len(),
-        width: info.width,
-        height: info.height,
+        width,
+        height,
         initial_box: Some(init.bounding_box()),
         seconds: output.seconds,
         fps: records.len() as f64 / output.seconds.max(1e-9),
@@ -330,6 +491,7 @@ pub fn run(args: &Args) -> Result<()> {
         status_counts: status_counts(&records),
         metrics,
         outputs: Vec::new(),
+        interrupted,
     };
     if args.report {
         written.push("report.html".into());
@@ -337,6 +499,18 @@ pub fn run(args: &Args) -> Result<()> {
     written.push("summary.json".into());
     summary.outputs = written;
     if args.report {
+        let kept: Vec<_> = strip.into_items().into_iter().map(|(_, f)| f).collect();
+        let picked = match strip_known {
+            Some(_) => kept,
+            None => {
+                let ks = strip_indices(kept.len(), STRIP_FRAMES);
+                kept.into_iter()
+                    .enumerate()
+                    .filter(|(i, _)| ks.contains(i))
+                    .map(|(_, f)| f)
+                    .collect()
+            }
+        };
         let input = ReportInput {
             title: format!("{} — {}", sequence.name, config.name),
             subtitle: format!(
@@ -345,15 +519,30 @@ pub fn run(args: &Args) -> Result<()> {
             ),
             metrics: summary_rows(&summary),
             figures,
-            strip: strip_frames,
+            strip: picked,
         };
         write_report(&args.out.join("report.html"), &input)?;
     }
     write_summary(&args.out.join("summary.json"), &summary)?;
+    if let Some(e) = stop {
+        return Err(e);
+    }
     if !args.quiet {
-        print_summary(&summary, &args.out);
+        print_summary(&summary, &args.out)?;
     }
     Ok(())
+}
+
+/// A progress spinner for a stream of unknown length, hidden when `quiet`.
+fn stream_progress(quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new_spinner();
+    if let Ok(style) = ProgressStyle::with_template("{msg} {pos} frames, {per_sec}") {
+        bar.set_style(style);
+    }
+    bar
 }
 
 /// `boxes.txt`: one line per input frame; frames before the tracker started (an OTB sequence
@@ -379,29 +568,30 @@ fn score(
     evaluate(&boxes, t, Some(seconds.max(1e-9)))
 }
 
-fn print_summary(s: &Summary, out: &Path) {
-    println!(
-        "{}: {} frames with {} ({} particles) at {:.1} frames/s",
+fn print_summary(s: &Summary, out: &Path) -> Result<()> {
+    let mut text = format!(
+        "{}: {} frames with {} ({} particles) at {:.1} frames/s\n",
         s.sequence, s.frames, s.tracker, s.particles, s.fps
     );
     if let Some(m) = &s.metrics {
-        println!(
-            "  precision@20px {:.3}, success AUC {:.3}, mean IoU {:.3}{}",
+        text.push_str(&format!(
+            "  precision@20px {:.3}, success AUC {:.3}, mean IoU {:.3}{}\n",
             m.precision_20,
             m.success_auc,
             m.mean_iou,
             m.failed_at_frame
                 .map(|f| format!(", lost at frame {}", f + 1))
                 .unwrap_or_default()
-        );
+        ));
     }
     if let Some(c) = s.status_counts {
-        println!(
-            "  status: {} locked, {} partial, {} lost",
+        text.push_str(&format!(
+            "  status: {} locked, {} partial, {} lost\n",
             c[TrackerStatus::Locked.index()],
             c[TrackerStatus::Partial.index()],
             c[TrackerStatus::Lost.index()]
-        );
+        ));
     }
-    println!("  outputs in {}", out.display());
+    text.push_str(&format!("  outputs in {}\n", out.display()));
+    crate::output::print_stdout(&text)
 }

@@ -1,0 +1,87 @@
+//! Keeping an evenly spaced subset of a sequence of unknown length in bounded memory.
+
+/// Keeps the items whose index is a multiple of a stride; when more than `cap` are kept, every
+/// other one is dropped and the stride doubled. So at most `cap` items are held, evenly spaced,
+/// whatever the length (an animated GIF of a stream, a report's strip of frames).
+#[derive(Debug, Clone)]
+pub struct Thinned<T> {
+    items: Vec<(usize, T)>,
+    stride: usize,
+    cap: usize,
+}
+
+impl<T> Thinned<T> {
+    /// Keeps at most `cap` items (at least 2), starting with every `stride`-th (at least 1). With
+    /// a known length `n`, `stride = n.div_ceil(cap)` never needs thinning.
+    pub fn new(cap: usize, stride: usize) -> Self {
+        Self {
+            items: Vec::new(),
+            stride: stride.max(1),
+            cap: cap.max(2),
+        }
+    }
+
+    /// Whether item `k` would be kept now (to skip building items that would be dropped).
+    pub fn wants(&self, k: usize) -> bool {
+        k % self.stride == 0
+    }
+
+    /// Offers item `k` (indices increase from 0).
+    pub fn push(&mut self, k: usize, item: T) {
+        if !self.wants(k) {
+            return;
+        }
+        self.items.push((k, item));
+        if self.items.len() > self.cap {
+            let stride = 2 * self.stride;
+            self.items.retain(|(i, _)| i % stride == 0);
+            self.stride = stride;
+        }
+    }
+
+    /// The current stride: one kept item every `stride` items.
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+
+    /// The kept items with their indices.
+    pub fn into_items(self) -> Vec<(usize, T)> {
+        self.items
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keeps_at_most_cap_evenly_spaced() {
+        for n in [0, 1, 5, 150, 151, 1000, 12_345] {
+            let mut t = Thinned::new(150, 1);
+            for k in 0..n {
+                t.push(k, k);
+            }
+            let stride = t.stride();
+            let items = t.into_items();
+            assert!(items.len() <= 150, "{n}");
+            assert_eq!(items.len(), n.div_ceil(stride), "{n}");
+            assert!(
+                items
+                    .iter()
+                    .enumerate()
+                    .all(|(i, &(k, v))| k == i * stride && v == k)
+            );
+        }
+    }
+
+    #[test]
+    fn known_length_keeps_the_fixed_stride() {
+        let n: usize = 1000;
+        let mut t = Thinned::new(150, n.div_ceil(150));
+        for k in 0..n {
+            t.push(k, ());
+        }
+        assert_eq!(t.stride(), 7);
+        assert_eq!(t.into_items().len(), 143);
+    }
+}
