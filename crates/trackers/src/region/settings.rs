@@ -22,10 +22,18 @@ pub struct RegionSettings {
     /// Value bins for unsaturated or dark pixels, and grey-level bins of a grey frame (default 8
     /// and twice that for grey frames).
     pub value_bins: usize,
+    /// Outer ellipse of the ring that the colour contrast compares the inside with, in
+    /// half-axes of the hypothesis (default 1.5).
+    pub contrast_ring: f64,
     /// Weight of the colour log-ratio term, nats per unit of mean log-ratio (default 12).
     pub colour_weight: f64,
-    /// Weight of the contour-gradient term, nats per unit of normalised gradient (default 3).
+    /// Weight of the contour-gradient term, nats per unit of normalised gradient (default 1).
     pub gradient_weight: f64,
+    /// Weight of the grey template term, nats per unit of normalised cross-correlation
+    /// (Odobez Eq. 23's ρ) between the hypothesis' patch and the target's template (default 40).
+    pub template_weight: f64,
+    /// Learning rate of the template from locked frames (default 0.05).
+    pub template_rate: f64,
     /// Smallest effective sample size after weighting, as a fraction of N: the likelihood is
     /// tempered (raised to the smallest power ≤ 1 that keeps this ESS) so that the weights never
     /// collapse onto one particle (default 0.3).
@@ -36,9 +44,13 @@ pub struct RegionSettings {
     /// Probability that a particle takes a long jump of four times `sigma_position` (default
     /// 0.15): fast motion without a wide everyday spread.
     pub jump_probability: f64,
-    /// Standard deviation of the log-scale random walk (default 0.03).
+    /// Standard deviation of the log-scale random walk (default 0.01).
     pub sigma_scale: f64,
-    /// Standard deviation of the log-aspect random walk (default 0.02).
+    /// Pull of the log-scale back towards the first frame's scale, per frame (default 0.02): the
+    /// colour contrast prefers the whole head to a face box, and without the pull the estimate
+    /// grows over hair and neck.
+    pub scale_reversion: f64,
+    /// Standard deviation of the log-aspect random walk (default 0.01).
     pub sigma_aspect: f64,
     /// Share of the velocity of the estimate carried into the prediction (default 0.5).
     pub velocity_retention: f64,
@@ -66,13 +78,17 @@ impl Default for RegionSettings {
             search: 3.0,
             hs_bins: 8,
             value_bins: 8,
+            contrast_ring: 1.5,
             colour_weight: 12.0,
-            gradient_weight: 3.0,
+            gradient_weight: 1.0,
+            template_weight: 40.0,
+            template_rate: 0.05,
             min_ess_fraction: 0.3,
             sigma_position: 0.15,
             jump_probability: 0.15,
-            sigma_scale: 0.03,
-            sigma_aspect: 0.02,
+            sigma_scale: 0.01,
+            sigma_aspect: 0.01,
+            scale_reversion: 0.02,
             velocity_retention: 0.5,
             target_rate: 0.02,
             background_rate: 0.2,
@@ -115,6 +131,11 @@ impl RegionSettings {
             "must be between 1 and 20 half-axes",
         )?;
         check(
+            "region.contrast_ring",
+            (1.05..=4.0).contains(&self.contrast_ring),
+            "must be between 1.05 and 4 half-axes",
+        )?;
+        check(
             "region.hs_bins",
             (2..=32).contains(&self.hs_bins),
             "must be between 2 and 32",
@@ -127,13 +148,18 @@ impl RegionSettings {
         for (name, v) in [
             ("region.colour_weight", self.colour_weight),
             ("region.gradient_weight", self.gradient_weight),
+            ("region.template_weight", self.template_weight),
         ] {
-            check(name, v.is_finite() && (0.0..=1e3).contains(&v), "must be in [0, 1000]")?;
+            check(
+                name,
+                v.is_finite() && (0.0..=1e3).contains(&v),
+                "must be in [0, 1000]",
+            )?;
         }
         check(
             "region.colour_weight",
-            self.colour_weight + self.gradient_weight > 0.0,
-            "the colour and gradient weights cannot both be 0",
+            self.colour_weight + self.gradient_weight + self.template_weight > 0.0,
+            "the colour, gradient and template weights cannot all be 0",
         )?;
         check(
             "region.min_ess_fraction",
@@ -145,12 +171,18 @@ impl RegionSettings {
             ("region.sigma_scale", self.sigma_scale),
             ("region.sigma_aspect", self.sigma_aspect),
         ] {
-            check(name, v.is_finite() && (0.0..=2.0).contains(&v), "must be in [0, 2]")?;
+            check(
+                name,
+                v.is_finite() && (0.0..=2.0).contains(&v),
+                "must be in [0, 2]",
+            )?;
         }
         for (name, v) in [
             ("region.jump_probability", self.jump_probability),
             ("region.velocity_retention", self.velocity_retention),
             ("region.target_rate", self.target_rate),
+            ("region.template_rate", self.template_rate),
+            ("region.scale_reversion", self.scale_reversion),
             ("region.background_rate", self.background_rate),
             ("region.reacquire_share", self.reacquire_share),
             ("region.detection_share", self.detection_share),
@@ -181,10 +213,16 @@ mod tests {
             sigma_scale: f64::NAN,
             ..RegionSettings::default()
         };
-        assert!(nan.validate().unwrap_err().to_string().contains("sigma_scale"));
+        assert!(
+            nan.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("sigma_scale")
+        );
         let none = RegionSettings {
             colour_weight: 0.0,
             gradient_weight: 0.0,
+            template_weight: 0.0,
             ..RegionSettings::default()
         };
         assert!(none.validate().is_err());

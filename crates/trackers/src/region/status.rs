@@ -72,7 +72,11 @@ impl LostChain {
     pub fn estimate(&self) -> StatusEstimate {
         let p = self.p_lost;
         StatusEstimate {
-            alpha_hat: if p > 0.5 { Status::Lost } else { Status::Locked },
+            alpha_hat: if p > 0.5 {
+                Status::Lost
+            } else {
+                Status::Locked
+            },
             alpha_probs: [1.0 - p, 0.0, p],
             gamma_hat: p,
         }

@@ -25,7 +25,7 @@ use crate::{Error, Result};
 
 /// Most working pixels read from one frame: while the target is lost the window is the whole
 /// frame, read coarser when needed to stay under this bound.
-const MAX_WINDOW_PIXELS: f64 = 160_000.0;
+const MAX_WINDOW_PIXELS: f64 = 40_000.0;
 /// Bisection steps of the tempering exponent.
 const TEMPER_STEPS: usize = 30;
 /// The outer ellipse of the background ring, in target half-axes.
@@ -35,8 +35,12 @@ const RING_OUTER: f64 = 2.0;
 const RING_INNER: f64 = 1.25;
 /// Standard deviation of the log-scale of a particle drawn anywhere in the frame.
 const REACQUIRE_SCALE_SPREAD: f64 = 0.1;
-/// The outer ellipse of the contrast ring, in half-axes of the hypothesis.
-const CONTRAST_RING: f64 = 1.5;
+/// Samples across the template's disc (a TEMPLATE_GRID² grid clipped to the disc).
+const TEMPLATE_GRID: usize = 12;
+/// Share of the learnt colours in the models the weights read (the rest is the first frame's).
+const LEARNT_SHARE: f64 = 0.5;
+/// Most centres tried by the dense search of the window.
+const MAX_DETECTION_CENTRES: f64 = 1024.0;
 /// Spacing of the detection grid, in the target's geometric-mean half-axis.
 const DETECTION_STRIDE: f64 = 0.25;
 /// How far the long jumps reach, in `sigma_position`.
@@ -80,21 +84,27 @@ struct Track {
     /// The target's colour at the first frame, and as learnt since.
     initial: Histogram,
     target: Histogram,
+    /// The background's colour at the first frame, and as learnt since.
+    initial_background: Histogram,
     background: Histogram,
     chain: LostChain,
+    /// The grey template of the first frame, and as learnt since (empty without the term).
+    initial_template: Vec<f32>,
+    template: Vec<f32>,
     size: (usize, usize),
 }
 
 impl Track {
-    /// The target model the weights read: the first frame's colours and the learnt ones in
-    /// equal parts, so that learning follows slow changes without drifting onto the background.
-    /// With no learning the first frame's model alone.
-    fn model(&self, rate: f64) -> Histogram {
-        let mut m = self.initial.clone();
-        if rate > 0.0 {
-            m.blend(&self.target, 0.5);
-        }
-        m
+    /// The target and background models the weights read: the first frame's colours and the
+    /// learnt ones in equal parts, so that learning follows slow changes without drifting (a
+    /// background model learnt only around the estimate would stop knowing the colours next to
+    /// the target, such as hair beside a face, and the estimate would grow over them).
+    fn models(&self) -> (Histogram, Histogram) {
+        let mut target = self.initial.clone();
+        target.blend(&self.target, LEARNT_SHARE);
+        let mut background = self.initial_background.clone();
+        background.blend(&self.background, LEARNT_SHARE);
+        (target, background)
     }
 }
 
@@ -106,6 +116,11 @@ pub struct RegionTracker {
     track: Option<Track>,
     window: WorkingWindow,
     ratios: Vec<f32>,
+    /// The template's sample points on the unit disc, and a buffer for one hypothesis' samples
+    /// and for the template the weights read.
+    grid: Vec<[f64; 2]>,
+    samples: Vec<f32>,
+    reference: Vec<f32>,
     log_weights: Vec<f64>,
     ancestors: Vec<usize>,
     frame: usize,
@@ -128,6 +143,9 @@ impl RegionTracker {
             track: None,
             window: WorkingWindow::default(),
             ratios: Vec::new(),
+            grid: motion_est::unit_disc_grid(TEMPLATE_GRID),
+            samples: Vec::new(),
+            reference: Vec::new(),
             log_weights: Vec::new(),
             ancestors: Vec::new(),
             frame: 0,
@@ -159,7 +177,12 @@ impl RegionTracker {
             [0.0, 0.0, fw, fh]
         } else {
             let (hx, hy) = (self.settings.search * axes.0, self.settings.search * axes.1);
-            [centre[0] - hx, centre[1] - hy, centre[0] + hx, centre[1] + hy]
+            [
+                centre[0] - hx,
+                centre[1] - hy,
+                centre[0] + hx,
+                centre[1] + hy,
+            ]
         };
         let area = (rect[2].min(fw) - rect[0].max(0.0)) * (rect[3].min(fh) - rect[1].max(0.0));
         step = step.max((area.max(0.0) / MAX_WINDOW_PIXELS).sqrt());
@@ -174,7 +197,9 @@ impl RegionTracker {
             .counts(bins, Some(e), None, |r2| (1.0 - r2).max(0.0));
         let outer = scaled(e, RING_OUTER);
         let inner = scaled(e, RING_INNER);
-        let ring = self.window.counts(bins, Some(&outer), Some(&inner), |_| 1.0);
+        let ring = self
+            .window
+            .counts(bins, Some(&outer), Some(&inner), |_| 1.0);
         (Histogram::from_counts(inside), Histogram::from_counts(ring))
     }
 }
@@ -242,7 +267,10 @@ impl Tracker for RegionTracker {
                 reason: format!("{ellipse:?} must be finite with positive semi-axes"),
             });
         }
-        let e = Ellipse { theta: 0.0, ..ellipse };
+        let e = Ellipse {
+            theta: 0.0,
+            ..ellipse
+        };
         let bins = self.bins(&frame);
         self.read_window(&frame, &bins, [e.cx, e.cy], (e.a, e.b), false);
         let (target, background) = self.histograms(bins.len(), &e);
@@ -252,6 +280,8 @@ impl Tracker for RegionTracker {
                 reason: format!("{ellipse:?} covers no pixel of the frame or has no surroundings"),
             });
         };
+        let mut template = vec![0.0; self.grid.len()];
+        self.window.patch(&e, &self.grid, &mut template)?;
         let estimate = Hypothesis {
             cx: e.cx,
             cy: e.cy,
@@ -272,8 +302,11 @@ impl Tracker for RegionTracker {
             velocity: [0.0; 2],
             initial: target.clone(),
             target,
+            initial_background: background.clone(),
             background,
             chain,
+            initial_template: template.clone(),
+            template,
             size: (frame.width(), frame.height()),
         });
         self.frame = 0;
@@ -356,13 +389,16 @@ impl RegionTracker {
         let bins = self.bins(frame);
         let centre = [current.cx + drift[0], current.cy + drift[1]];
         self.read_window(frame, &bins, centre, (current.a, current.b), p_lost > 0.5);
-        let target = track.model(s.target_rate);
-        log_ratios(&target, &track.background, &mut self.ratios);
+        let (target, background) = track.models();
+        log_ratios(&target, &background, &mut self.ratios);
         self.window.integrate(&self.ratios);
-        let stride = DETECTION_STRIDE * (current.a * current.b).sqrt() / self.window.step();
+        let [x0, y0, x1, y1] = self.window.bounds();
+        let cells = (x1 - x0) * (y1 - y0) / (self.window.step() * self.window.step());
+        let stride = (DETECTION_STRIDE * (current.a * current.b).sqrt() / self.window.step())
+            .max((cells / MAX_DETECTION_CENTRES).sqrt());
         let detection = self
             .window
-            .best_centre((current.a, current.b), CONTRAST_RING, stride)
+            .best_centre((current.a, current.b), s.contrast_ring, stride)
             .map(|(c, _)| c);
         let detect_share = s.detection_share.max(s.reacquire_share * p_lost);
         track.scratch.clear();
@@ -373,8 +409,7 @@ impl RegionTracker {
                 Hypothesis {
                     cx: (d[0] + sigma * normal(&mut rng)).clamp(0.0, fw),
                     cy: (d[1] + sigma * normal(&mut rng)).clamp(0.0, fh),
-                    log_scale: track.estimate.log_scale
-                        + REACQUIRE_SCALE_SPREAD * normal(&mut rng),
+                    log_scale: track.estimate.log_scale + REACQUIRE_SCALE_SPREAD * normal(&mut rng),
                     log_aspect: track.estimate.log_aspect,
                 }
             } else {
@@ -386,7 +421,8 @@ impl RegionTracker {
                 Hypothesis {
                     cx: (p.cx + drift[0] + k * sigma * normal(&mut rng)).clamp(0.0, fw),
                     cy: (p.cy + drift[1] + k * sigma * normal(&mut rng)).clamp(0.0, fh),
-                    log_scale: p.log_scale + s.sigma_scale * normal(&mut rng),
+                    log_scale: (1.0 - s.scale_reversion) * p.log_scale
+                        + s.sigma_scale * normal(&mut rng),
                     log_aspect: (1.0 - ASPECT_REVERSION) * p.log_aspect
                         + s.sigma_aspect * normal(&mut rng),
                 }
@@ -396,10 +432,27 @@ impl RegionTracker {
         std::mem::swap(&mut track.particles, &mut track.scratch);
 
         // Weights.
+        self.reference.clear();
+        self.reference.extend(
+            track
+                .initial_template
+                .iter()
+                .zip(&track.template)
+                .map(|(a, b)| {
+                    ((1.0 - LEARNT_SHARE) * f64::from(*a) + LEARNT_SHARE * f64::from(*b)) as f32
+                }),
+        );
+        self.samples.resize(self.grid.len(), 0.0);
+        let ncc = motion_est::NccSettings::default();
         self.log_weights.clear();
         for p in &track.particles {
             let e = p.ellipse(track.base);
-            let mut lw = s.colour_weight * self.window.contrast(&e, CONTRAST_RING);
+            let mut lw = s.colour_weight * self.window.contrast(&e, s.contrast_ring);
+            if s.template_weight > 0.0 {
+                self.window.patch(&e, &self.grid, &mut self.samples)?;
+                let d = motion_est::ncc_distance(&self.reference, &self.samples, &ncc)?;
+                lw += s.template_weight * (1.0 - d);
+            }
             if s.gradient_weight > 0.0 {
                 lw += s.gradient_weight * self.window.edge_strength(&e);
             }
@@ -432,7 +485,9 @@ impl RegionTracker {
 
         // Status from the estimate's colour; model updates from locked frames only.
         let (inside, ring) = self.histograms(bins.len(), &e);
-        let similarity = inside.as_ref().map_or(0.0, |h| h.bhattacharyya(&track.initial));
+        let similarity = inside
+            .as_ref()
+            .map_or(0.0, |h| h.bhattacharyya(&track.initial));
         track.chain.update(similarity);
         let p_lost = track.chain.p_lost();
         if p_lost < 0.5 {
@@ -440,9 +495,20 @@ impl RegionTracker {
                 track.background.blend(ring, s.background_rate);
             }
             if let Some(inside) = &inside {
-                track.target.blend(inside, s.target_rate * (1.0 - 2.0 * p_lost));
+                track
+                    .target
+                    .blend(inside, s.target_rate * (1.0 - 2.0 * p_lost));
             }
             track.velocity = [mean.cx - track.estimate.cx, mean.cy - track.estimate.cy];
+            if s.template_rate > 0.0 {
+                self.window.patch(&e, &self.grid, &mut self.samples)?;
+                let rate = (s.template_rate * (1.0 - 2.0 * p_lost)) as f32;
+                for (t, v) in track.template.iter_mut().zip(&self.samples) {
+                    if v.is_finite() {
+                        *t = (1.0 - rate) * *t + rate * v;
+                    }
+                }
+            }
         } else {
             track.velocity = [0.0; 2];
         }

@@ -7,6 +7,7 @@
 use contour_obs::Ellipse;
 
 use super::colour::ColourBins;
+use crate::Result;
 use crate::frame::Frame;
 
 /// Strips of the staircase that approximates an ellipse in [`WorkingWindow::ellipse_sum`].
@@ -52,11 +53,7 @@ impl WorkingWindow {
         self.grey.clear();
         self.bins.reserve(n);
         self.grey.reserve(n);
-        let offsets: &[f64] = if step >= 2.0 {
-            &[-0.25, 0.25]
-        } else {
-            &[0.0]
-        };
+        let offsets: &[f64] = if step >= 2.0 { &[-0.25, 0.25] } else { &[0.0] };
         let inv = 1.0 / (offsets.len() * offsets.len()) as f32;
         let (w, h) = (frame.width(), frame.height());
         let grey = frame.data();
@@ -118,7 +115,12 @@ impl WorkingWindow {
         for j in 0..h {
             let mut row = 0.0f64;
             for i in 0..w {
-                row += f64::from(ratios.get(self.bins[j * w + i] as usize).copied().unwrap_or(0.0));
+                row += f64::from(
+                    ratios
+                        .get(self.bins[j * w + i] as usize)
+                        .copied()
+                        .unwrap_or(0.0),
+                );
                 self.integral[(j + 1) * (w + 1) + i + 1] = self.integral[j * (w + 1) + i + 1] + row;
             }
         }
@@ -231,6 +233,26 @@ impl WorkingWindow {
             y += stride;
         }
         best
+    }
+
+    /// Samples the grey window at `grid` (points of the unit disc) mapped onto the ellipse `e`
+    /// (full-resolution), bilinearly; samples outside the window are NaN. Returns how many are
+    /// valid.
+    ///
+    /// # Errors
+    /// A non-finite ellipse or a buffer whose length differs from the grid's.
+    pub fn patch(&self, e: &Ellipse, grid: &[[f64; 2]], out: &mut [f32]) -> Result<usize> {
+        let (cx, cy, a, b) = self.to_working(e);
+        let view = motion_est::ImageView::new(self.width, self.height, &self.grey)?;
+        let axes = nalgebra::Matrix2::new(a, 0.0, 0.0, b);
+        // Working pixel (i, j) covers [i, i + 1): its sample sits at i + 0.5.
+        Ok(motion_est::sample_patch_into(
+            view,
+            grid,
+            &axes,
+            [cx - 0.5, cy - 0.5],
+            out,
+        )?)
     }
 
     /// Contrast across the contour: the mean, over points of the ellipse, of the absolute grey

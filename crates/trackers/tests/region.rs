@@ -1,0 +1,215 @@
+//! The region tracker (`head` preset) on synthetic colour scenes with exact ground truth: it
+//! follows a textured face-coloured ellipse across a textured background, keeps its size, knows
+//! when the target has gone and finds it again, whatever the seed.
+
+use contour_obs::Ellipse;
+use trackers::{Frame, Preset, build};
+
+const W: usize = 320;
+const H: usize = 240;
+
+/// A deterministic hash texture in [0, 1).
+fn noise(x: usize, y: usize, salt: u64) -> f32 {
+    let mut z = (x as u64)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add((y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F))
+        ^ salt;
+    z = (z ^ (z >> 31)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    ((z >> 40) as f32) / (1u64 << 24) as f32
+}
+
+/// Grey and RGB pixels of a frame: blue-green blocks, a skin-coloured ellipse with a darker
+/// band (eyes) at `target`, when present.
+fn render(target: Option<Ellipse>) -> (Vec<f32>, Vec<u8>) {
+    let mut rgb = Vec::with_capacity(W * H * 3);
+    for y in 0..H {
+        for x in 0..W {
+            let block = noise(x / 16, y / 16, 7);
+            let n = noise(x, y, 3) * 20.0;
+            let mut p = [40.0 + 60.0 * block + n, 90.0 + 80.0 * block + n, 120.0 + n];
+            if let Some(e) = target {
+                let (u, v) = ((x as f64 - e.cx) / e.a, (y as f64 - e.cy) / e.b);
+                if u * u + v * v <= 1.0 {
+                    let band = if (-0.35..-0.1).contains(&v) { 0.6 } else { 1.0 };
+                    p = [(210.0 + n) * band, (150.0 + n) * band, (120.0 + n) * band];
+                }
+            }
+            rgb.extend(p.map(|c| c.clamp(0.0, 255.0) as u8));
+        }
+    }
+    let grey = rgb
+        .chunks(3)
+        .map(|p| 0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2]))
+        .collect();
+    (grey, rgb)
+}
+
+fn iou(a: [f64; 4], b: [f64; 4]) -> f64 {
+    let x0 = a[0].max(b[0]);
+    let y0 = a[1].max(b[1]);
+    let x1 = (a[0] + a[2]).min(b[0] + b[2]);
+    let y1 = (a[1] + a[3]).min(b[1] + b[3]);
+    let i = (x1 - x0).max(0.0) * (y1 - y0).max(0.0);
+    i / (a[2] * a[3] + b[2] * b[3] - i)
+}
+
+/// The target's path: a sweep to the right and back with a fast stretch, and hidden (`None`)
+/// on frames `hidden`.
+fn target_at(k: usize, hidden: &std::ops::Range<usize>) -> Option<Ellipse> {
+    if hidden.contains(&k) {
+        return None;
+    }
+    let t = k as f64;
+    let cx = 90.0 + 140.0 * (t / 30.0).sin().abs();
+    let cy = 120.0 + 30.0 * (t / 17.0).sin();
+    Some(Ellipse {
+        cx,
+        cy,
+        a: 22.0,
+        b: 28.0,
+        theta: 0.0,
+    })
+}
+
+struct Run {
+    mean_iou: f64,
+    worst_iou: f64,
+    p_lost_visible: f64,
+    p_lost_hidden: f64,
+    iou_after: f64,
+}
+
+fn track(seed: u64, frames: usize, hidden: std::ops::Range<usize>) -> Run {
+    let mut tracker = build(Preset::Head.config(200, seed)).unwrap();
+    let first = target_at(0, &hidden).unwrap();
+    let (g, c) = render(Some(first));
+    tracker
+        .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
+        .unwrap();
+    let (mut ious, mut visible, mut lost, mut after) = (vec![], vec![], vec![], vec![]);
+    for k in 1..frames {
+        let truth = target_at(k, &hidden);
+        let (g, c) = render(truth);
+        let e = tracker
+            .update(Frame::with_rgb(W, H, &g, &c).unwrap())
+            .unwrap();
+        let p_lost = e.status.unwrap().alpha_probs[2];
+        match truth {
+            Some(t) => {
+                let box_t = [t.cx - t.a, t.cy - t.b, 2.0 * t.a, 2.0 * t.b];
+                let o = iou(e.bbox, box_t);
+                if k < hidden.start {
+                    ious.push(o);
+                    visible.push(p_lost);
+                } else if k >= hidden.end + 10 {
+                    after.push(o);
+                }
+            }
+            None if k >= hidden.start + 3 => lost.push(p_lost),
+            None => {}
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    Run {
+        mean_iou: mean(&ious),
+        worst_iou: ious.iter().copied().fold(1.0, f64::min),
+        p_lost_visible: mean(&visible),
+        p_lost_hidden: mean(&lost),
+        iou_after: mean(&after),
+    }
+}
+
+#[test]
+fn follows_a_moving_target_on_every_seed() {
+    for seed in 1..=4 {
+        let r = track(seed, 60, 1000..1000);
+        assert!(
+            r.mean_iou > 0.75 && r.worst_iou > 0.5,
+            "seed {seed}: mean IoU {:.3}, worst {:.3}",
+            r.mean_iou,
+            r.worst_iou
+        );
+        assert!(
+            r.p_lost_visible < 0.1,
+            "seed {seed}: P(lost) {:.3}",
+            r.p_lost_visible
+        );
+    }
+}
+
+#[test]
+fn knows_when_the_target_is_gone_and_finds_it_again() {
+    for seed in 1..=4 {
+        let r = track(seed, 80, 30..45);
+        assert!(
+            r.p_lost_hidden > 0.8 && r.p_lost_visible < 0.1,
+            "seed {seed}: P(lost) {:.3} hidden, {:.3} visible",
+            r.p_lost_hidden,
+            r.p_lost_visible
+        );
+        assert!(
+            r.iou_after > 0.6,
+            "seed {seed}: IoU after {:.3}",
+            r.iou_after
+        );
+    }
+}
+
+#[test]
+fn grey_frames_work_too() {
+    let mut tracker = build(Preset::Head.config(100, 1)).unwrap();
+    let first = target_at(0, &(0..0)).unwrap();
+    let (g, _) = render(Some(first));
+    tracker.init(Frame::new(W, H, &g).unwrap(), first).unwrap();
+    let mut ious = Vec::new();
+    for k in 1..30 {
+        let t = target_at(k, &(0..0)).unwrap();
+        let (g, _) = render(Some(t));
+        let e = tracker.update(Frame::new(W, H, &g).unwrap()).unwrap();
+        ious.push(iou(e.bbox, [t.cx - t.a, t.cy - t.b, 2.0 * t.a, 2.0 * t.b]));
+    }
+    let mean = ious.iter().sum::<f64>() / ious.len() as f64;
+    assert!(mean > 0.6, "mean IoU {mean:.3}");
+}
+
+#[test]
+fn same_seed_same_output_and_bad_input_is_an_error() {
+    let run = |seed| {
+        let mut tracker = build(Preset::Head.config(100, seed)).unwrap();
+        let first = target_at(0, &(0..0)).unwrap();
+        let (g, c) = render(Some(first));
+        tracker
+            .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
+            .unwrap();
+        let (g, c) = render(target_at(1, &(0..0)));
+        tracker
+            .update(Frame::with_rgb(W, H, &g, &c).unwrap())
+            .unwrap()
+            .bbox
+    };
+    assert_eq!(run(5), run(5));
+    let mut tracker = build(Preset::Head.config(100, 1)).unwrap();
+    let (g, c) = render(None);
+    assert!(tracker.update(Frame::new(W, H, &g).unwrap()).is_err());
+    let bad = Ellipse {
+        cx: f64::NAN,
+        cy: 0.0,
+        a: 1.0,
+        b: 1.0,
+        theta: 0.0,
+    };
+    assert!(
+        tracker
+            .init(Frame::with_rgb(W, H, &g, &c).unwrap(), bad)
+            .is_err()
+    );
+    assert!(Frame::with_rgb(W, H, &g, &c[..10]).is_err());
+    let small = vec![0.0f32; 16];
+    tracker
+        .init(
+            Frame::new(W, H, &g).unwrap(),
+            target_at(0, &(0..0)).unwrap(),
+        )
+        .unwrap();
+    assert!(tracker.update(Frame::new(4, 4, &small).unwrap()).is_err());
+}
