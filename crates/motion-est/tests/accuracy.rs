@@ -145,18 +145,9 @@ fn region_64_affine() {
     assert!(e <= 0.015, "{e}");
 }
 
-#[test]
-fn region_64_with_independent_block() {
-    // A 40×40 block over the region's top-left corner: 1600/4096 = 39 % of the region.
-    let block = Block {
-        rect: [128.0, 88.0, 40.0, 40.0],
-        shift: [-5.0, 4.0],
-        texture: Texture::new(78, 300, 40.0),
-    };
-    let e = run(&region_case(Some(block)), 3, 6);
-    eprintln!("64×64 with 39 % block: {e:.5}");
-    assert!(e <= 0.075, "{e}");
-}
+// The 64×64 region with a 39 % independent block, formerly one configuration on one texture draw
+// (0.021 px, a lucky draw: 4 of 5 fresh draws failed), is covered by `tests/breakdown.rs` over
+// positions, motions, textures and draws (issue 16).
 
 #[test]
 fn tracking_preset_accuracy() {

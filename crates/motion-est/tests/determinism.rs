@@ -62,7 +62,11 @@ fn full_frame_estimate_is_bit_identical_with_one_or_two_threads() {
         let one = in_pool(1, run);
         let two = in_pool(2, run);
         let four = in_pool(4, run);
-        assert!(one.converged);
+        // The scale model cannot represent the pair's 2° rotation: its misfit exceeds the weights'
+        // scale ceiling (issue 16) and IRLS need not converge; only the bits matter here.
+        if spec.model == MotionModel::Affine {
+            assert!(one.converged, "{spec:?}: {one:?}");
+        }
         assert_eq!(bits(&one), bits(&two), "{spec:?}: 1 vs 2 threads");
         assert_eq!(bits(&one), bits(&four), "{spec:?}: 1 vs 4 threads");
         assert_eq!(one.iterations, two.iterations);
