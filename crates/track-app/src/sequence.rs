@@ -443,7 +443,7 @@ impl Y4mHeader {
         match (width, height) {
             (Some(width), Some(height)) => {
                 // Checked before any buffer is sized from the header.
-                let pixels = width.checked_mul(height).unwrap_or(usize::MAX);
+                let pixels = width.saturating_mul(height);
                 if width > MAX_SIDE || height > MAX_SIDE || pixels > MAX_PIXELS {
                     return Err(AppError::input(
                         name,

@@ -23,7 +23,7 @@ impl<T> Thinned<T> {
 
     /// Whether item `k` would be kept now (to skip building items that would be dropped).
     pub fn wants(&self, k: usize) -> bool {
-        k % self.stride == 0
+        k.is_multiple_of(self.stride)
     }
 
     /// Offers item `k` (indices increase from 0).
@@ -34,7 +34,7 @@ impl<T> Thinned<T> {
         self.items.push((k, item));
         if self.items.len() > self.cap {
             let stride = 2 * self.stride;
-            self.items.retain(|(i, _)| i % stride == 0);
+            self.items.retain(|(i, _)| i.is_multiple_of(stride));
             self.stride = stride;
         }
     }
