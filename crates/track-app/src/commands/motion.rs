@@ -152,7 +152,9 @@ pub fn run(args: &Args) -> Result<()> {
 }
 
 /// The JSON object of the issue: model, params, covariance (row-major), origin, scale,
-/// inlier_fraction, iterations (per level, 0 = full resolution), converged, millis.
+/// inlier_fraction, iterations (per level, 0 = full resolution), converged, reliable (false when
+/// the dominant motion could not be separated from the rest: treat the estimate as failed;
+/// `motion_est::MotionEstimate::reliable`), millis.
 fn to_json(est: &MotionEstimate, millis: f64) -> String {
     let value = serde_json::json!({
         "model": est.spec.model.name(),
@@ -164,6 +166,7 @@ fn to_json(est: &MotionEstimate, millis: f64) -> String {
         "inlier_fraction": est.inlier_fraction,
         "iterations": est.iterations,
         "converged": est.converged,
+        "reliable": est.reliable,
         "millis": millis,
     });
     value.to_string()
@@ -176,7 +179,7 @@ fn to_text(est: &MotionEstimate, millis: f64) -> String {
         .collect();
     let p: Vec<String> = est.params.iter().map(|v| format!("{v:.6}")).collect();
     format!(
-        "model {}{}\nparams [{}]\nstd    [{}]\norigin ({:.2}, {:.2})\nscale {:.3} grey levels, inliers {:.1} %, iterations {:?}, converged {}, {:.2} ms",
+        "model {}{}\nparams [{}]\nstd    [{}]\norigin ({:.2}, {:.2})\nscale {:.3} grey levels, inliers {:.1} %, iterations {:?}, converged {}, reliable {}, {:.2} ms",
         est.spec.model.name(),
         if est.spec.offset { " + offset" } else { "" },
         p.join(", "),
@@ -187,6 +190,7 @@ fn to_text(est: &MotionEstimate, millis: f64) -> String {
         100.0 * est.inlier_fraction,
         est.iterations,
         est.converged,
+        est.reliable,
         millis
     )
 }
@@ -289,6 +293,7 @@ mod tests {
             "inlier_fraction",
             "iterations",
             "converged",
+            "reliable",
             "millis",
         ] {
             assert!(v.get(key).is_some(), "missing {key}");
