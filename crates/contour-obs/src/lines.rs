@@ -17,6 +17,10 @@ use serde::{Deserialize, Serialize};
 use crate::scan::LineScan;
 use crate::{Affine2, Contour, EdgeDetector, EdgeSettings, Error, GreyView, Result};
 
+/// Most measurement lines a contour may have (a contour is sampled, not rasterised: more lines
+/// than this add cost without information).
+pub const MAX_LINES: usize = 1_000;
+
 /// Geometry of the measurement lines and the edge detector used on them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LineSettings {
@@ -49,6 +53,12 @@ impl LineSettings {
     /// # Errors
     /// [`Error::InvalidSetting`] naming the field.
     pub fn validate(&self) -> Result<()> {
+        if self.n_lines > MAX_LINES {
+            return Err(Error::InvalidSetting {
+                name: "n_lines",
+                reason: format!("must be at most {MAX_LINES}, got {}", self.n_lines),
+            });
+        }
         if self.n_lines < 3 {
             return Err(Error::InvalidSetting {
                 name: "n_lines",

@@ -175,10 +175,25 @@ impl TrackerConfig {
     /// # Errors
     /// The first invalid setting, as [`Error::InvalidSetting`] or the owning crate's error.
     pub fn validate(&self) -> Result<()> {
-        if self.particles == 0 {
+        if !(1..=MAX_PARTICLES).contains(&self.particles) {
             return Err(Error::InvalidSetting {
                 name: "particles",
-                reason: "must be at least 1".into(),
+                reason: format!("{} must be between 1 and {MAX_PARTICLES}", self.particles),
+            });
+        }
+        if self.filter.output_size.is_some_and(|m| m > MAX_PARTICLES) {
+            return Err(Error::InvalidSetting {
+                name: "filter.output_size",
+                reason: format!("must be at most {MAX_PARTICLES}"),
+            });
+        }
+        if self.motion.cluster_iterations > MAX_CLUSTER_ITERATIONS {
+            return Err(Error::InvalidSetting {
+                name: "motion.cluster_iterations",
+                reason: format!(
+                    "{} must be at most {MAX_CLUSTER_ITERATIONS}",
+                    self.motion.cluster_iterations
+                ),
             });
         }
         if !(self.init_spread.is_finite() && self.init_spread >= 0.0) {
@@ -294,6 +309,13 @@ pub const OCCLUSION_ARC: bool = true;
 /// (`tests/tracking.rs`); with 0.1 it does not rise on three of them. The price is the
 /// `distractor` scene, where a larger σ_γ lets γ explain the mismatch of a zooming target.
 pub const W_OCC_SIGMA_GAMMA: f64 = 0.3;
+
+/// Most particles a configuration may ask for: beyond this a frame takes seconds and the
+/// particle sets gigabytes, which is never what a tracker needs.
+pub const MAX_PARTICLES: usize = 1_000_000;
+
+/// Most Lloyd iterations of the motion clustering (it settles in a handful).
+pub const MAX_CLUSTER_ITERATIONS: usize = 100;
 
 /// The named trackers of both papers, and the combination neither has.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]

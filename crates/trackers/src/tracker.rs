@@ -271,7 +271,10 @@ impl ParticleTracker {
                         warm.as_deref(),
                         &mut self.motion_workspace,
                     )
-                    .ok()?;
+                    .ok()
+                    // An estimate that could not separate the dominant motion from the rest is a
+                    // failed estimate: the cluster falls back to the prior prediction.
+                    .filter(|est| est.reliable)?;
                 if self.config.motion.warm_start && est.converged {
                     warm = Some(est.params.clone());
                 }

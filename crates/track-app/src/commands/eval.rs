@@ -203,7 +203,7 @@ pub fn run(args: &Args) -> Result<()> {
                 &out.join("table1.csv"),
                 table1_csv(&rows, &TABLE1_COLUMNS, *trials).as_bytes(),
             )?;
-            println!("{md}");
+            crate::output::println_stdout(&md)?;
             Ok(())
         }
         Evaluation::Switching { run, frames, out } => {
@@ -228,7 +228,7 @@ pub fn run(args: &Args) -> Result<()> {
             let md = switching_markdown(&rows);
             write_atomic(&out.join("switching.md"), md.as_bytes())?;
             write_atomic(&out.join("switching.csv"), switching_csv(&rows).as_bytes())?;
-            println!("{md}");
+            crate::output::println_stdout(&md)?;
             Ok(())
         }
         Evaluation::Otb {
@@ -277,7 +277,7 @@ pub fn run(args: &Args) -> Result<()> {
             let md = otb_markdown(&rows);
             write_atomic(&out.join("otb.md"), md.as_bytes())?;
             write_atomic(&out.join("otb.csv"), otb_csv(&rows).as_bytes())?;
-            println!("{md}");
+            crate::output::println_stdout(&md)?;
             Ok(())
         }
     }

@@ -47,8 +47,9 @@ pub struct Args {
     /// A folder of images (sorted by name), an OTB folder (img/ + groundtruth_rect.txt), a .y4m
     /// file, or - for Y4M on standard input.
     pub sequence: String,
-    /// Tracker preset: m1, m2, m3, w-fixed, w-switch, w-hmm, w-occ, w-eval, full.
-    #[arg(long, default_value = "full")]
+    /// Tracker preset: head (recommended for real footage), m1, m2, m3, w-fixed, w-switch, w-hmm,
+    /// w-occ, w-eval, full.
+    #[arg(long, default_value = "head")]
     pub tracker: String,
     /// Number of particles [default: 200, or the configuration file's].
     #[arg(long)]
