@@ -95,6 +95,21 @@ pub trait Tracker: Send {
     fn particles(&self, max: usize) -> Vec<WeightedEllipse>;
 }
 
+/// Checks an initial ellipse: finite, with positive semi-axes.
+///
+/// # Errors
+/// [`Error::InvalidSetting`] naming the ellipse.
+pub(crate) fn check_initial(ellipse: &Ellipse) -> Result<()> {
+    let values = [ellipse.cx, ellipse.cy, ellipse.a, ellipse.b, ellipse.theta];
+    if values.iter().any(|v| !v.is_finite()) || !(ellipse.a > 0.0 && ellipse.b > 0.0) {
+        return Err(Error::InvalidSetting {
+            name: "initial ellipse",
+            reason: format!("{ellipse:?} must be finite with positive semi-axes"),
+        });
+    }
+    Ok(())
+}
+
 /// Builds the tracker a configuration describes.
 ///
 /// # Errors
@@ -454,13 +469,7 @@ impl Tracker for ParticleTracker {
 
     fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate> {
         let start = Instant::now();
-        let values = [ellipse.cx, ellipse.cy, ellipse.a, ellipse.b, ellipse.theta];
-        if values.iter().any(|v| !v.is_finite()) || !(ellipse.a > 0.0 && ellipse.b > 0.0) {
-            return Err(Error::InvalidSetting {
-                name: "initial ellipse",
-                reason: format!("{ellipse:?} must be finite with positive semi-axes"),
-            });
-        }
+        check_initial(&ellipse)?;
         let space = self.config.space;
         let centre = space.from_ellipse(&ellipse);
         let s0 = space.scale(&centre);

@@ -20,7 +20,7 @@ use super::window::WorkingWindow;
 use crate::config::TrackerConfig;
 use crate::frame::Frame;
 use crate::space::STATE_SLOTS;
-use crate::tracker::{Estimate, Tracker, WeightedEllipse};
+use crate::tracker::{Estimate, Tracker, WeightedEllipse, check_initial};
 use crate::{Error, Result};
 
 /// Most working pixels read from one frame: while the target is lost the window is the whole
@@ -260,13 +260,7 @@ impl Tracker for RegionTracker {
 
     fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate> {
         let start = Instant::now();
-        let values = [ellipse.cx, ellipse.cy, ellipse.a, ellipse.b];
-        if values.iter().any(|v| !v.is_finite()) || !(ellipse.a > 0.0 && ellipse.b > 0.0) {
-            return Err(Error::InvalidSetting {
-                name: "initial ellipse",
-                reason: format!("{ellipse:?} must be finite with positive semi-axes"),
-            });
-        }
+        check_initial(&ellipse)?;
         let e = Ellipse {
             theta: 0.0,
             ..ellipse
