@@ -14,17 +14,22 @@
 //!
 //! `cargo test -p motion-est --release --test breakdown -- --nocapture` prints the table.
 //!
-//! The generator is independent of `tests/common`: every frame row is evaluated by rotating each
-//! sinusoid's phasor along the row (the warped coordinates are affine in the column), which makes
-//! the exact pairs cheap enough for a grid of several hundred estimates.
+//! The texture is `tests/common`'s; every frame row is evaluated by rotating each sinusoid's
+//! phasor along the row (`Texture::row`: the warped coordinates are affine in the column), which
+//! makes the exact pairs cheap enough for a grid of several hundred estimates.
 #![allow(missing_docs)]
 
+mod common;
+
+use common::Texture;
 use motion_est::{ImageView, ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
-/// Sinusoids per texture (wavelengths uniform in 3–40 px, std 40 grey levels).
+/// Sinusoids per texture (wavelengths uniform in 3–40 px).
 const COMPONENTS: usize = 120;
+/// Standard deviation of a texture, grey levels.
+const TEXTURE_STD: f64 = 40.0;
 /// Texture and noise draws per configuration.
 const DRAWS: u64 = 2;
 /// The relative motions of the block, added to the background's translation.
@@ -33,46 +38,6 @@ const RELATIVE: [[f64; 2]; 4] = [[-4.0, 3.0], [-1.0, 1.0], [4.0, -3.0], [8.0, 6.
 const T: [f64; 2] = [3.0, -2.0];
 /// The failure threshold on the mean corner error, px.
 const FAIL: f64 = 0.5;
-
-/// A sum of sinusoids, 128 + amp Σ sin(k·r + φ).
-struct Texture {
-    comps: Vec<[f64; 3]>,
-    amp: f64,
-}
-
-impl Texture {
-    fn new(seed: u64) -> Self {
-        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
-        let comps = (0..COMPONENTS)
-            .map(|_| {
-                let lambda: f64 = rng.random_range(3.0..40.0);
-                let dir: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-                let phase: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-                let k = std::f64::consts::TAU / lambda;
-                [k * dir.cos(), k * dir.sin(), phase]
-            })
-            .collect();
-        Self {
-            comps,
-            amp: 40.0 * (2.0 / COMPONENTS as f64).sqrt(),
-        }
-    }
-
-    /// Adds the texture at points p0 + i·dp, i = 0..out.len(), to `out` (which starts at 0).
-    fn row(&self, p0: [f64; 2], dp: [f64; 2], out: &mut [f64]) {
-        out.fill(128.0);
-        for c in &self.comps {
-            let phi = c[0] * p0[0] + c[1] * p0[1] + c[2];
-            let d = c[0] * dp[0] + c[1] * dp[1];
-            let (mut s, mut co) = phi.sin_cos();
-            let (ds, dc) = d.sin_cos();
-            for v in out.iter_mut() {
-                *v += self.amp * s;
-                (s, co) = (s * dc + co * ds, co * dc - s * ds);
-            }
-        }
-    }
-}
 
 /// The background's motion about `origin`: d(r) = t + A (r − origin).
 #[derive(Clone, Copy)]
@@ -246,8 +211,8 @@ fn grid(scene: &Scene, side: usize, est: &MotionEstimator, seed: u64) -> Tally {
     let mut tally = Tally::default();
     for d in 0..DRAWS {
         let tseed = seed + 100 * d;
-        let tex = Texture::new(tseed);
-        let other = Texture::new(tseed + 1);
+        let tex = Texture::new(tseed, COMPONENTS, TEXTURE_STD);
+        let other = Texture::new(tseed + 1, COMPONENTS, TEXTURE_STD);
         let (b0, b1) = background(&tex, &warp, scene.w, scene.h);
         for place in [Place::Corner, Place::Edge, Place::Centre] {
             let (dx, dy) = match place {
@@ -351,23 +316,23 @@ const REGION: Scene = Scene {
     region: [32, 32, 64, 64],
 };
 
-#[test]
-fn region_64_breakdown_grid() {
+/// Runs the grid for each `(block side, allowed failures per 12 runs)` and checks that no
+/// failure is silent and that the failures stay within `allowed`.
+fn check_grid(scene: &Scene, label: &str, cases: &[(usize, usize)], seed: u64) {
     let est = estimator();
-    // 25, 32, 39 and 47 % of the 4096 pixels.
-    let tallies: Vec<_> = [(32, 0), (36, 1), (40, 3), (44, 12)]
-        .into_iter()
-        .map(|(side, allowed)| {
-            let t = grid(&REGION, side, &est, 16);
-            report("64×64", side, 64 * 64, &t);
-            (t, allowed)
-        })
-        .collect();
-    for (t, allowed) in tallies {
+    let pixels = scene.region[2] * scene.region[3];
+    for &(side, allowed) in cases {
+        let t = grid(scene, side, &est, seed);
+        report(label, side, pixels, &t);
         assert_eq!(t.silent, 0, "silent failures: {t:?}");
-        // At most `allowed` failures per 12 runs.
         assert!(t.failures() * 12 <= allowed * t.runs, "{t:?}");
     }
+}
+
+#[test]
+fn region_64_breakdown_grid() {
+    // 25, 32, 39 and 47 % of the 4096 pixels.
+    check_grid(&REGION, "64×64", &[(32, 0), (36, 1), (40, 3), (44, 12)], 16);
 }
 
 #[test]
@@ -377,21 +342,8 @@ fn full_frame_breakdown_grid() {
         h: 240,
         region: [0, 0, 320, 240],
     };
-    let est = estimator();
     // 25, 35 and 45 % of the 76 800 pixels.
-    let tallies: Vec<_> = [(139, 1), (164, 4), (186, 6)]
-        .into_iter()
-        .map(|(side, allowed)| {
-            let t = grid(&scene, side, &est, 17);
-            report("320×240", side, 320 * 240, &t);
-            (t, allowed)
-        })
-        .collect();
-    for (t, allowed) in tallies {
-        assert_eq!(t.silent, 0, "silent failures: {t:?}");
-        // At most `allowed` failures per 12 runs.
-        assert!(t.failures() * 12 <= allowed * t.runs, "{t:?}");
-    }
+    check_grid(&scene, "320×240", &[(139, 1), (164, 4), (186, 6)], 17);
 }
 
 #[test]

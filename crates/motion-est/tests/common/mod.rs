@@ -31,6 +31,22 @@ impl Texture {
         }
     }
 
+    /// Writes the texture at points p0 + i·dp, i = 0..out.len(), into `out`, rotating each
+    /// sinusoid's phasor along the row instead of evaluating a sine per point.
+    pub fn row(&self, p0: [f64; 2], dp: [f64; 2], out: &mut [f64]) {
+        out.fill(128.0);
+        for c in &self.comps {
+            let phi = c[0] * p0[0] + c[1] * p0[1] + c[2];
+            let d = c[0] * dp[0] + c[1] * dp[1];
+            let (mut s, mut co) = phi.sin_cos();
+            let (ds, dc) = d.sin_cos();
+            for v in out.iter_mut() {
+                *v += self.amp * s;
+                (s, co) = (s * dc + co * ds, co * dc - s * ds);
+            }
+        }
+    }
+
     pub fn eval(&self, x: f64, y: f64) -> f64 {
         let s: f64 = self
             .comps

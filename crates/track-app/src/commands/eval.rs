@@ -82,7 +82,8 @@ pub enum Evaluation {
         /// OTB folders.
         #[arg(required = true)]
         sequences: Vec<PathBuf>,
-        /// Trackers (default full), particles and seed.
+        /// Trackers (default head when no --config is given), particles and seed (both also
+        /// override those of a --config file).
         #[command(flatten)]
         run: TrackerRuns,
         /// Edge threshold of the measurement lines, grey levels per pixel (default: the
@@ -260,6 +261,7 @@ pub fn run(args: &Args) -> Result<()> {
                 runs.push(tracker_config(p.name(), None, overrides())?);
             }
             for path in configs {
+                // With a file, the preset name is not read.
                 runs.push(tracker_config("", Some(path), overrides())?);
             }
             let mut rows: Vec<(String, String, SequenceMetrics)> = Vec::new();

@@ -25,7 +25,6 @@ pub struct LostChain {
     persistence: f64,
     background_similarity: f64,
     p_lost: f64,
-    last_q: f64,
 }
 
 impl LostChain {
@@ -37,14 +36,12 @@ impl LostChain {
             persistence,
             background_similarity: background_similarity.clamp(0.0, MAX_BACKGROUND_SIMILARITY),
             p_lost: 0.0,
-            last_q: LOCKED_Q,
         }
     }
 
     /// One forward step on the estimate's similarity `rho` to the target model.
     pub fn update(&mut self, rho: f64) {
         let q = (rho - self.background_similarity) / (1.0 - self.background_similarity);
-        self.last_q = q;
         let stay = self.persistence;
         let prior_lost = self.p_lost * stay + (1.0 - self.p_lost) * (1.0 - stay);
         let log_locked = -0.5 * ((q - LOCKED_Q) / SPREAD).powi(2);
@@ -60,11 +57,6 @@ impl LostChain {
     /// P(lost) after the last update.
     pub fn p_lost(&self) -> f64 {
         self.p_lost
-    }
-
-    /// The rescaled similarity q of the last update.
-    pub fn last_similarity(&self) -> f64 {
-        self.last_q
     }
 
     /// The chain as a status estimate: α̂ locked or lost, and γ̂ = P(lost) (the region tracker

@@ -33,7 +33,7 @@ const RING_OUTER: f64 = 2.0;
 /// The inner ellipse of the background ring: a margin that the target's own pixels near its
 /// boundary do not reach.
 const RING_INNER: f64 = 1.25;
-/// Standard deviation of the log-scale of a particle drawn anywhere in the frame.
+/// Standard deviation of the log-scale of a particle drawn around the detection.
 const REACQUIRE_SCALE_SPREAD: f64 = 0.1;
 /// Samples across the template's disc (a TEMPLATE_GRID² grid clipped to the disc).
 const TEMPLATE_GRID: usize = 12;
@@ -122,6 +122,7 @@ pub struct RegionTracker {
     samples: Vec<f32>,
     reference: Vec<f32>,
     log_weights: Vec<f64>,
+    raw_log_weights: Vec<f64>,
     ancestors: Vec<usize>,
     frame: usize,
 }
@@ -147,6 +148,7 @@ impl RegionTracker {
             samples: Vec::new(),
             reference: Vec::new(),
             log_weights: Vec::new(),
+            raw_log_weights: Vec::new(),
             ancestors: Vec::new(),
             frame: 0,
         })
@@ -192,23 +194,10 @@ impl RegionTracker {
     /// Colour histogram inside `e` (Epanechnikov-weighted, as Pérez et al.) and of the ring
     /// around it, on the current window.
     fn histograms(&self, bins: usize, e: &Ellipse) -> (Option<Histogram>, Option<Histogram>) {
-        let inside = self
+        let (inside, ring) = self
             .window
-            .counts(bins, Some(e), None, |r2| (1.0 - r2).max(0.0));
-        let outer = scaled(e, RING_OUTER);
-        let inner = scaled(e, RING_INNER);
-        let ring = self
-            .window
-            .counts(bins, Some(&outer), Some(&inner), |_| 1.0);
+            .target_and_ring_counts(bins, e, (RING_INNER, RING_OUTER));
         (Histogram::from_counts(inside), Histogram::from_counts(ring))
-    }
-}
-
-fn scaled(e: &Ellipse, k: f64) -> Ellipse {
-    Ellipse {
-        a: e.a * k,
-        b: e.b * k,
-        ..*e
     }
 }
 
@@ -223,10 +212,18 @@ fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
 /// The exponent φ ∈ (0, 1] of the tempered weights `φ · log w`: 1 when the untempered weights
 /// keep an effective sample size of at least `min_ess`, else the largest φ that does (bisection).
 /// Normalises `log_weights` to the tempered log weights and fills `weights`.
-fn temper(log_weights: &mut [f64], weights: &mut Vec<f64>, min_ess: f64, step: u64) -> Result<f64> {
-    let raw = log_weights.to_vec();
+fn temper(
+    log_weights: &mut [f64],
+    raw: &mut Vec<f64>,
+    weights: &mut Vec<f64>,
+    min_ess: f64,
+    step: u64,
+) -> Result<f64> {
+    raw.clear();
+    raw.extend_from_slice(log_weights);
+    let raw = &*raw;
     let apply = |phi: f64, lw: &mut [f64], w: &mut Vec<f64>| -> Result<f64> {
-        for (t, r) in lw.iter_mut().zip(&raw) {
+        for (t, r) in lw.iter_mut().zip(raw.iter()) {
             *t = phi * r;
         }
         normalize_log_weights(lw, w)
@@ -455,6 +452,7 @@ impl RegionTracker {
         let n = track.particles.len();
         temper(
             &mut self.log_weights,
+            &mut self.raw_log_weights,
             &mut track.weights,
             s.min_ess_fraction * n as f64,
             t,

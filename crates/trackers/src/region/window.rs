@@ -31,6 +31,8 @@ pub struct WorkingWindow {
     integral: Vec<f64>,
     /// Mean gradient magnitude of the grey window (the edge term's unit).
     mean_gradient: f64,
+    /// (cos t, sin t) of the points [`WorkingWindow::edge_strength`] reads, filled once.
+    circle: Vec<[f64; 2]>,
 }
 
 impl WorkingWindow {
@@ -44,6 +46,12 @@ impl WorkingWindow {
         let x1 = rect[2].clamp(x0 + 1.0, fw);
         let y1 = rect[3].clamp(y0 + 1.0, fh);
         let step = step.max(1.0);
+        if self.circle.is_empty() {
+            self.circle.extend((0..CONTOUR_POINTS).map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / CONTOUR_POINTS as f64;
+                [t.cos(), t.sin()]
+            }));
+        }
         self.origin = [x0, y0];
         self.step = step;
         self.width = (((x1 - x0) / step).ceil() as usize).max(1);
@@ -264,9 +272,7 @@ impl WorkingWindow {
             return 0.0;
         }
         let mut sum = 0.0;
-        for k in 0..CONTOUR_POINTS {
-            let t = std::f64::consts::TAU * k as f64 / CONTOUR_POINTS as f64;
-            let (c, s) = (t.cos(), t.sin());
+        for &[c, s] in &self.circle {
             let (px, py) = (cx + a * c, cy + b * s);
             let (nx, ny) = (c / a, s / b);
             let norm = (nx * nx + ny * ny).sqrt();
@@ -275,7 +281,7 @@ impl WorkingWindow {
             let inside = self.grey_at(px - nx, py - ny);
             sum += f64::from((outside - inside).abs()) * 0.5;
         }
-        sum / CONTOUR_POINTS as f64 / (self.mean_gradient + 1.0)
+        sum / self.circle.len().max(1) as f64 / (self.mean_gradient + 1.0)
     }
 
     fn grey_at(&self, x: f64, y: f64) -> f32 {
@@ -291,35 +297,43 @@ impl WorkingWindow {
         top * (1.0 - fy) + bottom * fy
     }
 
-    /// Bin counts inside the ellipse `inner` scaled by `scale_in`... : the colour histogram of the
-    /// working pixels whose centre lies inside `outer` and outside `inner` (either may be
-    /// `None`: everything / nothing), weighted by `weight(r²)` of the normalised radius in
-    /// `outer`.
-    pub fn counts(
+    /// The colour bin counts of the ellipse `e` (working pixels whose centre lies inside it,
+    /// weighted by the Epanechnikov profile 1 − r², as Pérez et al.) and of the ring between
+    /// `e` scaled by `ring.0` and by `ring.1` (unweighted), in one pass over the ring's box.
+    pub fn target_and_ring_counts(
         &self,
         bins: usize,
-        outer: Option<&Ellipse>,
-        inner: Option<&Ellipse>,
-        weight: impl Fn(f64) -> f64,
-    ) -> Vec<f64> {
-        let mut counts = vec![0.0; bins];
-        let radius = |e: &Ellipse, x: f64, y: f64| {
-            let (cx, cy, a, b) = self.to_working(e);
-            let (u, v) = ((x - cx) / a.max(1e-9), (y - cy) / b.max(1e-9));
-            u * u + v * v
+        e: &Ellipse,
+        ring: (f64, f64),
+    ) -> (Vec<f64>, Vec<f64>) {
+        let (mut inside, mut around) = (vec![0.0; bins], vec![0.0; bins]);
+        let (cx, cy, a, b) = self.to_working(e);
+        let (a, b) = (a.max(1e-9), b.max(1e-9));
+        let (inner2, outer2) = (ring.0 * ring.0, ring.1 * ring.1);
+        let reach = ring.1.max(1.0);
+        let span = |c: f64, r: f64, n: usize| {
+            let lo = (c - r * reach).floor().max(0.0) as usize;
+            let hi = ((c + r * reach).ceil().max(0.0) as usize).min(n);
+            lo..hi
         };
-        for j in 0..self.height {
-            for i in 0..self.width {
-                let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
-                let r2 = outer.map_or(0.0, |e| radius(e, x, y));
-                if r2 > 1.0 || inner.is_some_and(|e| radius(e, x, y) <= 1.0) {
-                    continue;
+        for j in span(cy, b, self.height) {
+            let v = (j as f64 + 0.5 - cy) / b;
+            for i in span(cx, a, self.width) {
+                let u = (i as f64 + 0.5 - cx) / a;
+                let r2 = u * u + v * v;
+                let bin = self.bins[j * self.width + i] as usize;
+                if r2 <= 1.0 {
+                    if let Some(c) = inside.get_mut(bin) {
+                        *c += 1.0 - r2;
+                    }
                 }
-                if let Some(c) = counts.get_mut(self.bins[j * self.width + i] as usize) {
-                    *c += weight(r2);
+                if r2 > inner2 && r2 <= outer2 {
+                    if let Some(c) = around.get_mut(bin) {
+                        *c += 1.0;
+                    }
                 }
             }
         }
-        counts
+        (inside, around)
     }
 }
