@@ -23,7 +23,7 @@ mod common;
 
 use common::Texture;
 use motion_est::{ImageView, ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 
 /// Sinusoids per texture (wavelengths uniform in 3–40 px).

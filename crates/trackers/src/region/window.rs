@@ -322,15 +322,16 @@ impl WorkingWindow {
                 let u = (i as f64 + 0.5 - cx) / a;
                 let r2 = u * u + v * v;
                 let bin = self.bins[j * self.width + i] as usize;
-                if r2 <= 1.0 {
-                    if let Some(c) = inside.get_mut(bin) {
-                        *c += 1.0 - r2;
-                    }
+                if r2 <= 1.0
+                    && let Some(c) = inside.get_mut(bin)
+                {
+                    *c += 1.0 - r2;
                 }
-                if r2 > inner2 && r2 <= outer2 {
-                    if let Some(c) = around.get_mut(bin) {
-                        *c += 1.0;
-                    }
+                if r2 > inner2
+                    && r2 <= outer2
+                    && let Some(c) = around.get_mut(bin)
+                {
+                    *c += 1.0;
                 }
             }
         }
