@@ -213,3 +213,42 @@ fn same_seed_same_output_and_bad_input_is_an_error() {
         .unwrap();
     assert!(tracker.update(Frame::new(4, 4, &small).unwrap()).is_err());
 }
+
+#[test]
+fn a_tight_annotation_keeps_its_convention() {
+    // A face box inside a head: the annotation is 0.85 of the coloured region. The tracker
+    // follows the region the colours support and reports boxes in the annotation's convention,
+    // so the reported size stays the annotation's rather than growing to the region's.
+    const TIGHT: f64 = 0.85;
+    for seed in 1..=3 {
+        let mut tracker = build(Preset::Head.config(200, seed)).unwrap();
+        let none = 0..0;
+        let first = target_at(0, &none).unwrap();
+        let annotation = Ellipse {
+            a: first.a * TIGHT,
+            b: first.b * TIGHT,
+            ..first
+        };
+        let (g, c) = render(Some(first));
+        tracker
+            .init(Frame::with_rgb(W, H, &g, &c).unwrap(), annotation)
+            .unwrap();
+        let mut log_sizes = Vec::new();
+        for k in 1..40 {
+            let truth = target_at(k, &none).unwrap();
+            let (g, c) = render(Some(truth));
+            let e = tracker
+                .update(Frame::with_rgb(W, H, &g, &c).unwrap())
+                .unwrap();
+            let reported = (e.bbox[2] * e.bbox[3]).sqrt();
+            let expected = 2.0 * (annotation.a * annotation.b).sqrt();
+            log_sizes.push((reported / expected).ln());
+        }
+        let mean = log_sizes.iter().sum::<f64>() / log_sizes.len() as f64;
+        assert!(
+            mean.abs() < 0.06,
+            "seed {seed}: reported boxes are {:.3}× the annotation's size on average",
+            mean.exp()
+        );
+    }
+}

@@ -86,6 +86,28 @@ impl ColourBins {
     }
 }
 
+/// Share of coloured pixels (hue trusted, see [`ColourBins::of_rgb`]) below which an RGB frame
+/// is read as grey: a grey video stored as RGB has no hue to histogram, and its grey levels are
+/// binned finer than the value bins of a colour frame.
+const MIN_CHROMATIC_SHARE: f64 = 0.02;
+
+/// Whether an interleaved RGB image (components 0–255) has colour worth histogramming: at least
+/// [`MIN_CHROMATIC_SHARE`] of its pixels (read on a sparse lattice) have a trusted hue.
+pub fn is_chromatic(rgb: &[u8]) -> bool {
+    const STRIDE: usize = 7;
+    let (mut coloured, mut read) = (0usize, 0usize);
+    for px in rgb.chunks_exact(3).step_by(STRIDE) {
+        let [r, g, b] = [px[0], px[1], px[2]].map(f32::from);
+        let max = r.max(g).max(b);
+        let min = r.min(g).min(b);
+        read += 1;
+        if max / 255.0 >= MIN_VALUE && (max - min) / max >= MIN_SATURATION {
+            coloured += 1;
+        }
+    }
+    read > 0 && coloured as f64 >= MIN_CHROMATIC_SHARE * read as f64
+}
+
 /// A normalised histogram over [`ColourBins`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Histogram {
@@ -157,6 +179,19 @@ mod tests {
         let grey = ColourBins::grey(16);
         assert_eq!(grey.of_grey(0.0), 0);
         assert_eq!(grey.of_grey(255.0), 15);
+    }
+
+    #[test]
+    fn grey_stored_as_rgb_is_not_chromatic() {
+        let grey: Vec<u8> = (0..300u32).flat_map(|k| [(k % 256) as u8; 3]).collect();
+        assert!(!is_chromatic(&grey));
+        let mut tinted = grey.clone();
+        for px in tinted.chunks_exact_mut(3).step_by(5) {
+            px[0] = 200;
+            px[1] = 40;
+        }
+        assert!(is_chromatic(&tinted));
+        assert!(!is_chromatic(&[]));
     }
 
     #[test]

@@ -13,7 +13,8 @@ use smc_core::rng::{particle_rng, resampler_rng};
 use smc_core::weights::{effective_sample_size, normalize_log_weights};
 use smc_core::{Resampler, Systematic};
 
-use super::colour::{ColourBins, Histogram, log_ratios};
+use super::calibration::Calibration;
+use super::colour::{ColourBins, Histogram, is_chromatic, log_ratios};
 use super::settings::RegionSettings;
 use super::status::LostChain;
 use super::window::WorkingWindow;
@@ -75,6 +76,10 @@ impl Hypothesis {
 /// The state kept between frames.
 #[derive(Debug)]
 struct Track {
+    /// How pixels are binned, fixed at the first frame.
+    bins: ColourBins,
+    /// From the annotation to the tracked region, fixed at the first frame.
+    calibration: Calibration,
     base: (f64, f64),
     particles: Vec<Hypothesis>,
     scratch: Vec<Hypothesis>,
@@ -154,9 +159,11 @@ impl RegionTracker {
         })
     }
 
+    /// The bins of a track started on `frame`: colour bins for a frame with colour, grey levels
+    /// for a grey frame or a grey image stored as RGB.
     fn bins(&self, frame: &Frame<'_>) -> ColourBins {
         let s = &self.settings;
-        if frame.rgb().is_some() {
+        if frame.rgb().is_some_and(is_chromatic) {
             ColourBins::colour(s.hs_bins, s.value_bins)
         } else {
             ColourBins::grey(2 * s.value_bins)
@@ -271,6 +278,11 @@ impl Tracker for RegionTracker {
                 reason: format!("{ellipse:?} covers no pixel of the frame or has no surroundings"),
             });
         };
+        log_ratios(&target, &background, &mut self.ratios);
+        self.window.integrate(&self.ratios);
+        let calibration = Calibration::search(&self.window, &e, self.settings.contrast_ring);
+        let annotated = e;
+        let e = calibration.tracked(&annotated);
         let mut template = vec![0.0; self.grid.len()];
         self.window.patch(&e, &self.grid, &mut template)?;
         let estimate = Hypothesis {
@@ -285,6 +297,8 @@ impl Tracker for RegionTracker {
             target.bhattacharyya(&background),
         );
         self.track = Some(Track {
+            bins,
+            calibration,
             base: (e.a, e.b),
             particles: vec![estimate; n],
             scratch: Vec::with_capacity(n),
@@ -303,8 +317,8 @@ impl Tracker for RegionTracker {
         self.frame = 0;
         Ok(Estimate {
             frame: 0,
-            ellipse: e,
-            bbox: bbox(&e),
+            ellipse: annotated,
+            bbox: bbox(&annotated),
             state: [0.0; STATE_SLOTS],
             ess: n as f64,
             diagnostics: None,
@@ -337,7 +351,7 @@ impl Tracker for RegionTracker {
             .iter()
             .zip(&track.weights)
             .map(|(p, &w)| WeightedEllipse {
-                ellipse: p.ellipse(track.base),
+                ellipse: track.calibration.reported(&p.ellipse(track.base)),
                 weight: w,
             })
             .collect();
@@ -377,7 +391,7 @@ impl RegionTracker {
         // the target is believed lost a share of draws anywhere in the frame.
         // The window and its log-ratio integral image, read before the prediction: the best
         // centre of the current ellipse in it is where the detection jumps land.
-        let bins = self.bins(frame);
+        let bins = track.bins;
         let centre = [current.cx + drift[0], current.cy + drift[1]];
         self.read_window(frame, &bins, centre, (current.a, current.b), p_lost > 0.5);
         let (target, background) = track.models();
@@ -436,9 +450,10 @@ impl RegionTracker {
         self.samples.resize(self.grid.len(), 0.0);
         let ncc = motion_est::NccSettings::default();
         self.log_weights.clear();
+        let reference = self.window.area(&current);
         for p in &track.particles {
             let e = p.ellipse(track.base);
-            let mut lw = s.colour_weight * self.window.contrast(&e, s.contrast_ring);
+            let mut lw = s.colour_weight * self.window.contrast(&e, s.contrast_ring, reference);
             if s.template_weight > 0.0 {
                 self.window.patch(&e, &self.grid, &mut self.samples)?;
                 let d = motion_est::ncc_distance(&self.reference, &self.samples, &ncc)?;
@@ -517,10 +532,11 @@ impl RegionTracker {
         track.weights.fill(1.0 / n as f64);
 
         let status = track.chain.estimate();
+        let reported = track.calibration.reported(&e);
         Ok(Estimate {
             frame: self.frame,
-            ellipse: e,
-            bbox: bbox(&e),
+            ellipse: reported,
+            bbox: bbox(&reported),
             state: [0.0; STATE_SLOTS],
             ess,
             diagnostics: None,

@@ -29,6 +29,8 @@ pub struct WorkingWindow {
     grey: Vec<f32>,
     /// Integral image of the log-ratios, `(width + 1) × (height + 1)`.
     integral: Vec<f64>,
+    /// Integral image of the positive parts of the log-ratios (target-like evidence only).
+    integral_positive: Vec<f64>,
     /// Mean gradient magnitude of the grey window (the edge term's unit).
     mean_gradient: f64,
     /// (cos t, sin t) of the points [`WorkingWindow::edge_strength`] reads, filled once.
@@ -120,16 +122,23 @@ impl WorkingWindow {
         let (w, h) = (self.width, self.height);
         self.integral.clear();
         self.integral.resize((w + 1) * (h + 1), 0.0);
+        self.integral_positive.clear();
+        self.integral_positive.resize((w + 1) * (h + 1), 0.0);
         for j in 0..h {
             let mut row = 0.0f64;
+            let mut row_positive = 0.0f64;
             for i in 0..w {
-                row += f64::from(
+                let r = f64::from(
                     ratios
                         .get(self.bins[j * w + i] as usize)
                         .copied()
                         .unwrap_or(0.0),
                 );
-                self.integral[(j + 1) * (w + 1) + i + 1] = self.integral[j * (w + 1) + i + 1] + row;
+                row += r;
+                row_positive += r.max(0.0);
+                let (at, above) = ((j + 1) * (w + 1) + i + 1, j * (w + 1) + i + 1);
+                self.integral[at] = self.integral[above] + row;
+                self.integral_positive[at] = self.integral_positive[above] + row_positive;
             }
         }
     }
@@ -161,28 +170,29 @@ impl WorkingWindow {
 
     /// The integral image at a fractional corner, bilinearly interpolated, the corner clamped
     /// to the window (outside the window the log-ratio is taken as 0: no evidence).
-    fn integral_at(&self, x: f64, y: f64) -> f64 {
-        let (w, h) = (self.width, self.height);
+    fn integral_at(integral: &[f64], (w, h): (usize, usize), x: f64, y: f64) -> f64 {
         let x = x.clamp(0.0, w as f64);
         let y = y.clamp(0.0, h as f64);
         let (i, j) = ((x as usize).min(w - 1), (y as usize).min(h - 1));
         let (fx, fy) = (x - i as f64, y - j as f64);
         let stride = w + 1;
-        let at = |i: usize, j: usize| self.integral[j * stride + i];
+        let at = |i: usize, j: usize| integral[j * stride + i];
         let top = at(i, j) * (1.0 - fx) + at(i + 1, j) * fx;
         let bottom = at(i, j + 1) * (1.0 - fx) + at(i + 1, j + 1) * fx;
         top * (1.0 - fy) + bottom * fy
     }
 
-    fn box_sum(&self, x0: f64, y0: f64, x1: f64, y1: f64) -> f64 {
-        self.integral_at(x1, y1) - self.integral_at(x0, y1) - self.integral_at(x1, y0)
-            + self.integral_at(x0, y0)
+    fn box_sum(&self, integral: &[f64], x0: f64, y0: f64, x1: f64, y1: f64) -> f64 {
+        let size = (self.width, self.height);
+        let at = |x, y| Self::integral_at(integral, size, x, y);
+        at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0)
     }
 
-    /// The sum of the log-ratios over the ellipse, in working pixels, approximated by a
+    /// The sum of `integral`'s values (the log-ratios or their positive parts) over the
+    /// ellipse, in working pixels, approximated by a
     /// staircase of horizontal strips (exact for the strips, each as wide as the ellipse at its
     /// middle row), and the ellipse's area in working pixels.
-    pub fn ellipse_sum(&self, e: &Ellipse) -> (f64, f64) {
+    fn ellipse_sum(&self, integral: &[f64], e: &Ellipse) -> (f64, f64) {
         let (cx, cy, a, b) = self.to_working(e);
         let dy = 2.0 * b / STRIPS as f64;
         let mut sum = 0.0;
@@ -190,29 +200,43 @@ impl WorkingWindow {
             let y0 = cy - b + k as f64 * dy;
             let mid = (y0 + 0.5 * dy - cy) / b;
             let half = a * (1.0 - mid * mid).max(0.0).sqrt();
-            sum += self.box_sum(cx - half, y0, cx + half, y0 + dy);
+            sum += self.box_sum(integral, cx - half, y0, cx + half, y0 + dy);
         }
         (sum, std::f64::consts::PI * a * b)
     }
 
-    /// The colour contrast of the ellipse: the mean log-ratio inside it less the mean log-ratio
-    /// in the ring between it and the ellipse `ring` times larger, in nats per pixel. Both a
-    /// hypothesis too large (background inside dilutes the inner mean) and one too small (target
-    /// pixels in the ring raise the outer mean) lose contrast, so the term fixes the scale as well
-    /// as the position.
-    pub fn contrast(&self, e: &Ellipse, ring: f64) -> f64 {
-        let (inner, area) = self.ellipse_sum(e);
-        let outer_e = Ellipse {
+    /// The colour contrast of the ellipse `e`, in nats per pixel of the reference area:
+    ///
+    /// - the sum of the log-ratios inside `e`, divided by `reference` (the current estimate's
+    ///   area, [`WorkingWindow::area`]): the log-likelihood ratio of "these pixels are the target's,
+    ///   the rest the background's", as the pixel-wise posteriors of Bibby & Reid (2008). A sum, not
+    ///   a mean: a hypothesis grows while the pixels it takes in look more like the target than
+    ///   the background, and no further;
+    /// - less the mean of the positive log-ratios in the ring between `e` and the ellipse `ring`
+    ///   times larger: target-like pixels just outside the contour say the hypothesis is too small
+    ///   or off-centre. Only the positive part counts, so that pushing the ring from hair onto
+    ///   an even more background-like wall earns nothing (the mean of the signed log-ratios
+    ///   there made every estimate grow over hair and neck).
+    pub fn contrast(&self, e: &Ellipse, ring: f64, reference: f64) -> f64 {
+        let (inner, area) = self.ellipse_sum(&self.integral, e);
+        let (inner_positive, _) = self.ellipse_sum(&self.integral_positive, e);
+        let outer = Ellipse {
             a: e.a * ring,
             b: e.b * ring,
             ..*e
         };
-        let (outer, outer_area) = self.ellipse_sum(&outer_e);
+        let (outer_positive, outer_area) = self.ellipse_sum(&self.integral_positive, &outer);
         let ring_area = outer_area - area;
-        if area < 1e-9 || ring_area < 1e-9 {
+        if reference < 1e-9 || ring_area < 1e-9 {
             return 0.0;
         }
-        inner / area - (outer - inner) / ring_area
+        inner / reference - (outer_positive - inner_positive) / ring_area
+    }
+
+    /// The area of `e` in working pixels.
+    pub fn area(&self, e: &Ellipse) -> f64 {
+        let (_, _, a, b) = self.to_working(e);
+        std::f64::consts::PI * a * b
     }
 
     /// The centre of the best [`WorkingWindow::contrast`] of an ellipse of half-axes `axes`
@@ -220,6 +244,7 @@ impl WorkingWindow {
     /// pixels apart; `None` for an empty grid.
     pub fn best_centre(&self, axes: (f64, f64), ring: f64, stride: f64) -> Option<([f64; 2], f64)> {
         let stride = stride.max(1.0);
+        let reference = std::f64::consts::PI * axes.0 * axes.1 / (self.step * self.step);
         let mut best: Option<([f64; 2], f64)> = None;
         let mut y = 0.5 * stride;
         while y < self.height as f64 {
@@ -232,7 +257,7 @@ impl WorkingWindow {
                     b: axes.1,
                     theta: 0.0,
                 };
-                let c = self.contrast(&e, ring);
+                let c = self.contrast(&e, ring, reference);
                 if best.is_none_or(|(_, b)| c > b) {
                     best = Some(([e.cx, e.cy], c));
                 }
