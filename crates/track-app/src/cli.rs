@@ -11,8 +11,8 @@ use crate::{AppError, Result};
 
 /// Visual contour tracking with particle filters (Odobez et al. 2003, Wu et al. 2003).
 ///
-/// Exit codes: 0 success; 1 a computation failed; 2 bad arguments or settings; 3 bad input data
-/// (images, ground truth, video); 4 an output could not be written.
+/// Exit codes: 0 success; 1 a computation failed; 2 bad arguments or settings (a `--config` file
+/// included); 3 bad input data (images, ground truth, video); 4 an output could not be written.
 #[derive(Debug, Parser)]
 #[command(
     name = "track",
@@ -20,8 +20,9 @@ use crate::{AppError, Result};
     about = "Visual contour tracking with particle filters (Odobez et al. 2003, Wu et al. 2003)",
     propagate_version = true,
     after_help = "Start with `track demo`: it needs no input and writes ./track-demo/report.html.\n\n\
-        Exit codes: 0 success; 1 a computation failed; 2 bad arguments or settings; 3 bad input \
-        data (images, ground truth, video); 4 an output could not be written."
+        Exit codes: 0 success; 1 a computation failed; 2 bad arguments or settings (a --config \
+        file included); 3 bad input data (images, ground truth, video); 4 an output could not be \
+        written."
 )]
 pub struct Cli {
     /// The command to run.
@@ -34,7 +35,7 @@ pub struct Cli {
 pub enum Command {
     /// Generate a synthetic scene, track it and write overlays, plots and a report.
     Demo(commands::demo::Args),
-    /// Track an object through a sequence of images or a Y4M video.
+    /// Track an object through a sequence of images, a video file or a Y4M stream.
     Run(commands::run::Args),
     /// Evaluate trackers: Odobez's Table 1, the switching processes, or OTB sequences.
     Eval(commands::eval::Args),

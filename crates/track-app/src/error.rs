@@ -7,9 +7,11 @@ pub type Result<T, E = AppError> = std::result::Result<T, E>;
 
 /// Everything that can stop a `track` command. Each variant names the file or value at fault.
 ///
-/// Exit codes (also in `track --help`): 0 success, 1 a computation failed (for example the filter
-/// degenerated), 2 bad command-line arguments or settings, 3 bad input data (images, ground truth,
-/// video), 4 an output could not be written. A closed standard output ends a command quietly
+/// Exit codes (also in `track --help` and the README's table): 0 success, 1 a computation failed
+/// (for example the filter degenerated, or `track motion` found no reliable motion), 2 bad
+/// command-line arguments or settings — a `--config` file included, whether it does not parse or
+/// holds a value out of range —, 3 bad input data (images, ground truth, video, ffmpeg missing
+/// for a video), 4 an output could not be written. A closed standard output ends a command quietly
 /// with 0; a run stopped by a signal exits with 128 + the signal number (130 for Ctrl-C, 143 for
 /// SIGTERM) after writing what it had computed.
 #[derive(Debug, thiserror::Error)]

@@ -73,34 +73,51 @@ impl Box2 {
     /// Checks that the box can start a tracker in a `width`×`height` frame: finite, of positive
     /// width and height, and with its centre inside the frame (a box may stick out of the frame
     /// partly, as real targets near the border do, but not lie outside it). `what` names the box in
-    /// the error (for example `--init` or `groundtruth_rect.txt line 1`).
+    /// the error (for example `--init`).
     ///
     /// # Errors
     /// [`AppError::InvalidSetting`] naming `what`, the box and the frame size.
     pub fn validate_in_frame(&self, width: usize, height: usize, what: &str) -> Result<()> {
-        let shown = format!("{},{},{},{}", self.x, self.y, self.w, self.h);
+        self.check_in_frame(width, height)
+            .map_err(|reason| AppError::setting(what, reason))
+    }
+
+    /// The check of [`Box2::validate_in_frame`], returning what is wrong as text, so that the
+    /// caller can say whose box it is (an option, or a line of a ground-truth file).
+    ///
+    /// # Errors
+    /// The reason, with the box written compactly ([`fmt_num`]) and the frame size.
+    pub fn check_in_frame(&self, width: usize, height: usize) -> std::result::Result<(), String> {
+        let shown = self.shown();
         if !self.is_finite() {
-            return Err(AppError::setting(
-                what,
-                format!("box {shown} is not finite"),
-            ));
+            return Err(format!("box {shown} is not finite"));
         }
         if self.w <= 0.0 || self.h <= 0.0 {
-            return Err(AppError::setting(
-                what,
-                format!("box {shown} has zero or negative size"),
-            ));
+            return Err(format!("box {shown} has zero or negative size"));
         }
         let (cx, cy) = self.centre();
         if cx < 0.0 || cy < 0.0 || cx >= width as f64 || cy >= height as f64 {
-            return Err(AppError::setting(
-                what,
-                format!(
-                    "box {shown} lies outside the {width}×{height} frame (its centre is outside)"
-                ),
+            return Err(format!(
+                "box {shown} lies outside the {width}×{height} frame (its centre is outside)"
             ));
         }
         Ok(())
+    }
+
+    /// `x,y,w,h` written compactly for messages ([`fmt_num`]).
+    pub fn shown(&self) -> String {
+        [self.x, self.y, self.w, self.h].map(fmt_num).join(",")
+    }
+}
+
+/// A number for a message: as typed for ordinary values (`12.5`), in scientific notation when
+/// very large or very small (`1e300`, not 301 digits), so that an error stays one short line.
+pub fn fmt_num(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }
 
@@ -205,9 +222,19 @@ pub fn parse_ellipse_arg(text: &str, name: &str) -> Result<Ellipse> {
     Ok(Ellipse::new(cx, cy, a, b, angle))
 }
 
-/// Parses one ground-truth line (1-based `line_no` for messages). All-zero or zero-size boxes are
-/// unlabelled frames.
-fn parse_line(text: &str, line_no: usize) -> std::result::Result<Option<Box2>, String> {
+/// One parsed ground-truth line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum GtLine {
+    /// A box of positive size.
+    Box(Box2),
+    /// `0,0,0,0`: the OTB mark of an unlabelled frame.
+    Unlabelled,
+    /// Any other box of zero width or height: no target on this frame.
+    ZeroSize(Box2),
+}
+
+/// Parses one ground-truth line (1-based `line_no` for messages).
+fn parse_line(text: &str, line_no: usize) -> std::result::Result<GtLine, String> {
     let fields: Vec<&str> = text
         .split([',', '\t', ' ', ';'])
         .map(str::trim)
@@ -237,38 +264,61 @@ fn parse_line(text: &str, line_no: usize) -> std::result::Result<Option<Box2>, S
             text.trim()
         ));
     }
-    // `0,0,0,0` marks an unlabelled frame; a zero-size box carries no target either, so it is
-    // treated the same way rather than breaking evaluation of a whole sequence.
-    if w == 0.0 || h == 0.0 {
-        return Ok(None);
+    if v == [0.0; 4] {
+        return Ok(GtLine::Unlabelled);
     }
-    Ok(Some(Box2::new(x, y, w, h)))
+    if w == 0.0 || h == 0.0 {
+        return Ok(GtLine::ZeroSize(Box2::new(x, y, w, h)));
+    }
+    Ok(GtLine::Box(Box2::new(x, y, w, h)))
 }
 
 /// Parses the text of a ground-truth file: one entry per line, `None` for unlabelled frames.
 /// Trailing blank lines are ignored; a blank line before the last box is an error (line i belongs
 /// to frame i, so a gap would shift every later label).
 ///
+/// `0,0,0,0` marks an unlabelled frame. A box of zero width or height *after* the first labelled
+/// box carries no target and is taken as unlabelled too, rather than breaking the evaluation of a
+/// whole sequence; *before* it, such a box stands where the tracker would start, so it is an
+/// error (taking it as unlabelled would silently start the tracker on a later frame).
+///
 /// # Errors
 /// [`AppError::BadInput`] naming `path` and the 1-based line number: wrong field count, a field
-/// that is not a finite number, a negative size.
+/// that is not a finite number, a negative size, a zero-size box before the first labelled one.
 pub fn parse_groundtruth(text: &str, path: &Path) -> Result<Vec<Option<Box2>>> {
     let lines: Vec<&str> = text.lines().collect();
     let last = lines.iter().rposition(|l| !l.trim().is_empty());
     let Some(last) = last else {
         return Err(AppError::input(path, "the ground-truth file has no boxes"));
     };
-    lines[..=last]
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            if l.trim().is_empty() {
-                Err(AppError::input(path, format!("line {}: empty line", i + 1)))
-            } else {
-                parse_line(l, i + 1).map_err(|reason| AppError::input(path, reason))
+    let mut labelled = false;
+    let mut out = Vec::with_capacity(last + 1);
+    for (i, l) in lines[..=last].iter().enumerate() {
+        if l.trim().is_empty() {
+            return Err(AppError::input(path, format!("line {}: empty line", i + 1)));
+        }
+        let entry = match parse_line(l, i + 1).map_err(|reason| AppError::input(path, reason))? {
+            GtLine::Box(b) => {
+                labelled = true;
+                Some(b)
             }
-        })
-        .collect()
+            GtLine::Unlabelled => None,
+            GtLine::ZeroSize(b) if !labelled => {
+                return Err(AppError::input(
+                    path,
+                    format!(
+                        "line {}: the first box {} has zero width or height, so it cannot start \
+                         the tracker (only 0,0,0,0 marks an unlabelled frame)",
+                        i + 1,
+                        b.shown()
+                    ),
+                ));
+            }
+            GtLine::ZeroSize(_) => None,
+        };
+        out.push(entry);
+    }
+    Ok(out)
 }
 
 /// Reads and parses a ground-truth file (see [`parse_groundtruth`]).
@@ -307,6 +357,35 @@ pub fn first_labelled(truth: &[Option<Box2>]) -> Option<(usize, Box2)> {
         .iter()
         .enumerate()
         .find_map(|(i, b)| b.map(|b| (i, b)))
+}
+
+/// The first labelled frame and its box, checked against the `width`×`height` frames of the
+/// sequence `sequence`: the box the tracker starts from.
+///
+/// # Errors
+/// [`AppError::BadInput`] (exit 3: the ground truth is input data) naming the file, the line,
+/// the sequence and what is wrong: no labelled box, or a first box that is not finite, has no
+/// area or lies outside the frame.
+pub fn first_box_in_frame(
+    truth: &[Option<Box2>],
+    path: &Path,
+    sequence: &str,
+    width: usize,
+    height: usize,
+) -> Result<(usize, Box2)> {
+    let (k, b) = first_labelled(truth)
+        .ok_or_else(|| AppError::input(path, "no labelled box (every line is 0,0,0,0)"))?;
+    b.check_in_frame(width, height).map_err(|reason| {
+        AppError::input(
+            path,
+            format!(
+                "line {}: the first labelled box cannot start the tracker on sequence {sequence}: \
+                 {reason}",
+                k + 1
+            ),
+        )
+    })?;
+    Ok((k, b))
 }
 
 #[cfg(test)]

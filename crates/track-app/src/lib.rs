@@ -21,5 +21,6 @@ pub mod render;
 pub mod report;
 pub mod sequence;
 pub mod session;
+pub mod video;
 
 pub use error::{AppError, Result};

@@ -39,7 +39,7 @@ pub fn check_replaceable(path: &Path) -> Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
         Err(source) => Err(AppError::Write {
             path: path.to_path_buf(),
-            source,
+            source: file_in_place_of_folder(path).unwrap_or(source),
         }),
     }
 }
@@ -76,6 +76,22 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
+/// When a parent folder of `path` is a file, the error that says so. Creating or opening `path`
+/// would otherwise fail with the system's bare "Not a directory" or "File exists".
+fn file_in_place_of_folder(path: &Path) -> Option<std::io::Error> {
+    let file = path
+        .ancestors()
+        .skip(1)
+        .find(|a| std::fs::metadata(a).is_ok_and(|m| !m.is_dir()))?;
+    Some(std::io::Error::new(
+        std::io::ErrorKind::AlreadyExists,
+        format!(
+            "{} exists and is a file, not a folder, so nothing can be written in it",
+            file.display()
+        ),
+    ))
+}
+
 /// Creates the folder `dir` (and its parents) for outputs, with a clear message when a
 /// component is a file.
 ///
@@ -91,10 +107,14 @@ pub fn create_dir(dir: &Path) -> Result<()> {
         Ok(_) => {
             return Err(wrap(std::io::Error::new(
                 std::io::ErrorKind::AlreadyExists,
-                "it exists and is not a folder",
+                "it exists and is a file, not a folder; give a folder, or a name that does not \
+                 exist yet",
             )));
         }
         Err(_) => {}
+    }
+    if let Some(e) = file_in_place_of_folder(dir) {
+        return Err(wrap(e));
     }
     std::fs::create_dir_all(dir).map_err(wrap)
 }

@@ -115,16 +115,60 @@ fn num(out: &mut String, v: f64, frame: usize, column: &str) -> Result<()> {
     Ok(())
 }
 
-/// The number of β classes across `records`: every record has either none or the same number.
-fn beta_width(records: &[FrameRecord]) -> Result<usize> {
-    let mut width = 0;
+/// The optional columns of `track.csv`: the β class probabilities and the α status
+/// probabilities. They are a property of the tracker ([`CsvColumns::of_tracker`]), not of the
+/// frames tracked, so that a one-frame run writes the same columns as a long one.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CsvColumns {
+    /// Number of clutter classes K: columns `beta_p0…beta_p{K−1}` (0: none).
+    pub beta_classes: usize,
+    /// Whether the columns `alpha_p_locked,alpha_p_partial,alpha_p_lost` are written.
+    pub status: bool,
+}
+
+impl CsvColumns {
+    /// The columns of the tracker `config` builds: β probabilities for the contour trackers with
+    /// switching clutter (one per class of its clutter model), α probabilities for the trackers
+    /// with the status HMM and for the region tracker (its lost/locked chain).
+    pub fn of_tracker(config: &trackers::TrackerConfig) -> Self {
+        if config.region.is_some() {
+            return Self {
+                beta_classes: 0,
+                status: true,
+            };
+        }
+        Self {
+            beta_classes: match &config.clutter {
+                trackers::ClutterMode::Switching(c) => c.lambda_mean.len(),
+                trackers::ClutterMode::Fixed { .. } => 0,
+            },
+            status: matches!(config.occlusion, trackers::OcclusionMode::Status(_)),
+        }
+    }
+
+    /// The columns the records themselves need: every record has either no β probabilities or
+    /// the same number, and α columns when any record has α probabilities.
+    ///
+    /// # Errors
+    /// [`AppError::Computation`] naming the frame whose number of β probabilities differs.
+    pub fn of_records(records: &[FrameRecord]) -> Result<Self> {
+        Ok(Self {
+            beta_classes: beta_width(records, 0)?,
+            status: records.iter().any(|r| !r.alpha_probs.is_empty()),
+        })
+    }
+}
+
+/// The number of β classes across `records`, starting from `width` (0: not fixed yet): every
+/// record has either none or the same number.
+fn beta_width(records: &[FrameRecord], mut width: usize) -> Result<usize> {
     for r in records {
         let k = r.beta_probs.len();
         if k > 0 && width > 0 && k != width {
             return Err(AppError::computation(
                 "track.csv",
                 format!(
-                    "frame {}: {k} clutter-class probabilities, earlier frames had {width}",
+                    "frame {}: {k} clutter-class probabilities, expected {width}",
                     r.frame + 1
                 ),
             ));
@@ -134,19 +178,30 @@ fn beta_width(records: &[FrameRecord]) -> Result<usize> {
     Ok(width)
 }
 
+/// Renders `track.csv` with the columns the records need ([`CsvColumns::of_records`]); a
+/// command that knows its tracker uses [`csv_string_with`] so that the columns do not depend on
+/// the frames.
+///
+/// # Errors
+/// As [`csv_string_with`].
+pub fn csv_string(records: &[FrameRecord]) -> Result<String> {
+    csv_string_with(records, CsvColumns::of_records(records)?)
+}
+
 /// Renders `track.csv`: a header row and one row per record; absent values are empty cells.
 ///
 /// Columns: `frame` (1-based), `cx,cy,a,b,angle` (ellipse, angle in radians), `x,y,w,h` (box),
-/// `ess`, `beta_hat` (0-based class), `beta_p0…beta_p{K−1}` (only when some record has β
-/// probabilities), `lambda_hat`, `gamma_hat`, `alpha_hat` (`locked`/`partial`/`lost`),
-/// `alpha_p_locked,alpha_p_partial,alpha_p_lost` (only when some record has them), `millis`.
+/// `ess`, `beta_hat` (0-based class), `beta_p0…beta_p{K−1}` (when `columns.beta_classes` is
+/// K > 0), `lambda_hat`, `gamma_hat`, `alpha_hat` (`locked`/`partial`/`lost`),
+/// `alpha_p_locked,alpha_p_partial,alpha_p_lost` (when `columns.status`), `millis`. A record
+/// with probabilities the columns do not cover widens them rather than losing its values.
 ///
 /// # Errors
 /// [`AppError::Computation`] naming the frame and column for a NaN or infinite value, a record
 /// whose number of β probabilities differs from the others, or α probabilities that are not 3.
-pub fn csv_string(records: &[FrameRecord]) -> Result<String> {
-    let k = beta_width(records)?;
-    let has_alpha = records.iter().any(|r| !r.alpha_probs.is_empty());
+pub fn csv_string_with(records: &[FrameRecord], columns: CsvColumns) -> Result<String> {
+    let k = beta_width(records, columns.beta_classes)?;
+    let has_alpha = columns.status || records.iter().any(|r| !r.alpha_probs.is_empty());
     let mut out = String::from("frame,cx,cy,a,b,angle,x,y,w,h,ess,beta_hat");
     for i in 0..k {
         let _ = write!(out, ",beta_p{i}");
@@ -228,6 +283,14 @@ pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<()> {
     write_atomic(path, csv_string(records)?.as_bytes())
 }
 
+/// Writes `track.csv` with the given columns (see [`csv_string_with`]) atomically.
+///
+/// # Errors
+/// As [`csv_string_with`], and [`AppError::Write`].
+pub fn write_csv_with(path: &Path, records: &[FrameRecord], columns: CsvColumns) -> Result<()> {
+    write_atomic(path, csv_string_with(records, columns)?.as_bytes())
+}
+
 /// Renders `boxes.txt`: `x,y,w,h` of each record's box, one line per frame, two decimals (the
 /// format OTB-style evaluation toolkits read).
 ///
@@ -276,6 +339,9 @@ pub struct Summary {
     pub width: usize,
     /// Frame height, pixels.
     pub height: usize,
+    /// Frames per second of the input, when it states it (a Y4M header, a video file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_rate: Option<f64>,
     /// The box that initialised the tracker.
     pub initial_box: Option<Box2>,
     /// Total tracking time, seconds.
@@ -318,6 +384,9 @@ impl Summary {
             ("fps", self.fps),
             ("mean_millis", self.mean_millis),
         ];
+        if let Some(r) = self.frame_rate {
+            fields.push(("frame_rate", r));
+        }
         if let Some(b) = &self.initial_box {
             fields.extend([("initial_box.x", b.x), ("initial_box.y", b.y)]);
             fields.extend([("initial_box.w", b.w), ("initial_box.h", b.h)]);
@@ -500,6 +569,7 @@ mod tests {
             seconds: 10.0,
             fps: 50.2,
             mean_millis: 19.9,
+            frame_rate: Some(25.0),
             initial_box: Some(Box2::new(128.0, 46.0, 104.0, 127.0)),
             status_counts: Some([500, 2, 0]),
             outputs: vec!["track.csv".into()],

@@ -155,7 +155,8 @@ fn rgb_to_gray(img: &RgbImage) -> Vec<f32> {
 // ---------------------------------------------------------------------------------------------
 // Image folders.
 
-/// A folder of PNG or JPEG images, read in order of file name.
+/// A folder of images (PNG, JPEG, GIF, BMP, WebP, TIFF), read in the natural order of their
+/// file names.
 #[derive(Debug, Clone)]
 pub struct ImageFolder {
     folder: PathBuf,
@@ -165,39 +166,76 @@ pub struct ImageFolder {
     first: Option<(u32, u32, PathBuf)>,
 }
 
-/// Whether `path` has a PNG or JPEG extension (case-insensitive).
+/// The file extensions read as images (lower case; any case matches).
+pub const IMAGE_EXTENSIONS: [&str; 8] = ["png", "jpg", "jpeg", "gif", "bmp", "webp", "tif", "tiff"];
+
+/// Whether `path` has one of the [`IMAGE_EXTENSIONS`] (case-insensitive).
 fn is_image_path(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
-        .map(|e| matches!(e.to_ascii_lowercase().as_str(), "png" | "jpg" | "jpeg"))
-        .unwrap_or(false)
+        .is_some_and(|e| IMAGE_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
+}
+
+/// The supported extensions as a message lists them: `.png, .jpg, …`.
+fn supported_extensions() -> String {
+    IMAGE_EXTENSIONS.map(|e| format!(".{e}")).join(", ")
+}
+
+/// Sorts frame files in natural order of their names: runs of digits compare by value, so
+/// `2.png` comes before `10.png` (as image viewers and ffmpeg's `%d` patterns number frames),
+/// and zero-padded names (`0001.png`) keep their order. Uses the `alphanumeric-sort` crate,
+/// which compares names that are not UTF-8 too.
+pub fn sort_natural(paths: &mut [PathBuf]) {
+    alphanumeric_sort::sort_slice_by_os_str_key(paths, |p: &PathBuf| {
+        p.file_name().unwrap_or(p.as_os_str())
+    });
 }
 
 impl ImageFolder {
-    /// Lists the PNG and JPEG files (`.png`, `.jpg`, `.jpeg`, any case) in `folder`, sorted by
-    /// file name. Other files are ignored.
+    /// Lists the image files ([`IMAGE_EXTENSIONS`], any case) in `folder`, sorted in natural
+    /// order of their names ([`sort_natural`]). Other files are ignored.
     ///
     /// # Errors
-    /// [`AppError::BadInput`] when the folder cannot be read or holds no image.
+    /// [`AppError::BadInput`] when the folder cannot be read or holds no image; the message lists
+    /// the supported extensions and the extensions of the files it found instead.
     pub fn open(folder: &Path) -> Result<Self> {
         let entries = std::fs::read_dir(folder)
             .map_err(|e| AppError::input(folder, format!("cannot read folder: {e}")))?;
         let mut paths = Vec::new();
+        let mut others: std::collections::BTreeMap<String, usize> = Default::default();
         for entry in entries {
             let entry =
                 entry.map_err(|e| AppError::input(folder, format!("cannot read folder: {e}")))?;
             let path = entry.path();
-            if path.is_file() && is_image_path(&path) {
+            if !path.is_file() {
+                continue;
+            }
+            if is_image_path(&path) {
                 paths.push(path);
+            } else {
+                let ext = path
+                    .extension()
+                    .map(|e| format!(".{}", e.to_string_lossy().to_ascii_lowercase()))
+                    .unwrap_or_else(|| "no extension".to_owned());
+                *others.entry(ext).or_default() += 1;
             }
         }
         if paths.is_empty() {
+            let found = if others.is_empty() {
+                "it holds no file".to_owned()
+            } else {
+                let list: Vec<String> = others.iter().map(|(e, n)| format!("{e} ×{n}")).collect();
+                format!("found only {}", list.join(", "))
+            };
             return Err(AppError::input(
                 folder,
-                "empty folder: no PNG or JPEG images (.png, .jpg, .jpeg)",
+                format!(
+                    "empty folder: no image with a supported extension ({}); {found}",
+                    supported_extensions()
+                ),
             ));
         }
-        paths.sort_by(|a, b| a.file_name().cmp(&b.file_name()));
+        sort_natural(&mut paths);
         Ok(Self {
             folder: folder.to_path_buf(),
             paths,
@@ -258,15 +296,23 @@ fn jpeg_is_complete(bytes: &[u8]) -> bool {
     }
 }
 
-/// Decodes one image file, with a clear message for unreadable, corrupt and truncated files.
-fn decode_image(path: &Path) -> Result<image::DynamicImage> {
+/// Decodes one image file, with a clear message for unreadable, corrupt and truncated files and
+/// for images the decoder's memory limit refuses. Every command reads images through it.
+///
+/// # Errors
+/// [`AppError::BadInput`] naming the file and the problem.
+pub fn decode_image(path: &Path) -> Result<image::DynamicImage> {
     let bytes = std::fs::read(path)
         .map_err(|e| AppError::input(path, format!("cannot read image: {e}")))?;
     if bytes.is_empty() {
         return Err(AppError::input(path, "empty file (0 bytes), not an image"));
     }
-    let format = image::guess_format(&bytes)
-        .map_err(|_| AppError::input(path, "corrupt image: not a PNG or JPEG file"))?;
+    let format = image::guess_format(&bytes).map_err(|_| {
+        AppError::input(
+            path,
+            "corrupt image: not a PNG, JPEG, GIF, BMP, WebP or TIFF file",
+        )
+    })?;
     if format == image::ImageFormat::Jpeg && !jpeg_is_complete(&bytes) {
         return Err(AppError::input(
             path,
@@ -284,10 +330,12 @@ fn decode_image(path: &Path) -> Result<image::DynamicImage> {
             }
             _ => {
                 let text = e.to_string();
-                if text.to_ascii_lowercase().contains("eof")
-                    || text.to_ascii_lowercase().contains("end of")
-                {
+                let lower = text.to_ascii_lowercase();
+                if lower.contains("eof") || lower.contains("end of") {
                     format!("truncated image ({text})")
+                } else if lower.contains("limit") || lower.contains("too large") {
+                    // Some decoders report their memory limit as a decoding error.
+                    format!("image too large: the decoder's memory limit refuses it ({text})")
                 } else {
                     format!("corrupt image ({text})")
                 }
@@ -391,6 +439,9 @@ impl Y4mHeader {
     /// [`AppError::BadInput`]: missing `YUV4MPEG2` signature, missing or invalid size, or an
     /// unsupported colour space (named in the message).
     pub fn parse(line: &[u8], name: &Path) -> Result<Self> {
+        // A header saved with Windows line endings ends in CR LF; the CR is not part of the last
+        // tag (it made `C420jpeg` read as an unknown colour space).
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
         let text = std::str::from_utf8(line)
             .map_err(|_| AppError::input(name, "bad Y4M header: not ASCII text"))?;
         let mut tokens = text.split(' ').filter(|t| !t.is_empty());
@@ -424,7 +475,8 @@ impl Y4mHeader {
                             return Err(AppError::input(
                                 name,
                                 format!(
-                                    "unsupported Y4M colour space C{other} (supported: C420jpeg, C420paldv, C420, C420mpeg2, C444, Cmono; convert with ffmpeg -pix_fmt yuv420p)"
+                                    "unsupported Y4M colour space {:?} (supported: C420jpeg, C420paldv, C420, C420mpeg2, C444, Cmono; convert with ffmpeg -pix_fmt yuv420p)",
+                                    format!("C{other}")
                                 ),
                             ));
                         }
@@ -783,6 +835,9 @@ pub enum SequenceKind {
     Y4mFile,
     /// Y4M on standard input (`-`).
     Y4mStdin,
+    /// Any other file, a video (`.mp4`, `.mov`, `.avi`, `.mkv`, …) decoded by ffmpeg and read as a
+    /// Y4M stream ([`crate::video`]).
+    Video,
 }
 
 /// Any frame source the command line can open.
@@ -792,34 +847,41 @@ pub enum Source {
     Images(ImageFolder),
     /// A Y4M stream.
     Y4m(Y4mSource),
+    /// A video file decoded by ffmpeg into a Y4M stream.
+    Video {
+        /// The stream of decoded frames.
+        frames: Y4mSource,
+        /// Stops ffmpeg early.
+        ffmpeg: crate::video::FfmpegHandle,
+    },
 }
 
 impl FrameSource for Source {
     fn len(&self) -> Option<usize> {
         match self {
             Source::Images(s) => s.len(),
-            Source::Y4m(s) => s.len(),
+            Source::Y4m(s) | Source::Video { frames: s, .. } => s.len(),
         }
     }
 
     fn next_frame(&mut self) -> Result<Option<Frame>> {
         match self {
             Source::Images(s) => s.next_frame(),
-            Source::Y4m(s) => s.next_frame(),
+            Source::Y4m(s) | Source::Video { frames: s, .. } => s.next_frame(),
         }
     }
 
     fn validate_all(&self) -> Result<SequenceInfo> {
         match self {
             Source::Images(s) => s.validate_all(),
-            Source::Y4m(s) => s.validate_all(),
+            Source::Y4m(s) | Source::Video { frames: s, .. } => s.validate_all(),
         }
     }
 
     fn is_stream(&self) -> bool {
         match self {
             Source::Images(s) => s.is_stream(),
-            Source::Y4m(s) => s.is_stream(),
+            Source::Y4m(s) | Source::Video { frames: s, .. } => s.is_stream(),
         }
     }
 }
@@ -829,7 +891,29 @@ impl Source {
     pub fn frame_size(&self) -> Option<(usize, usize)> {
         match self {
             Source::Images(_) => None,
-            Source::Y4m(s) => Some((s.header.width, s.header.height)),
+            Source::Y4m(s) | Source::Video { frames: s, .. } => {
+                Some((s.header.width, s.header.height))
+            }
+        }
+    }
+
+    /// The frame rate in frames per second, when the input states it (a Y4M header, a video).
+    pub fn frame_rate(&self) -> Option<f64> {
+        match self {
+            Source::Images(_) => None,
+            Source::Y4m(s) | Source::Video { frames: s, .. } => s
+                .header
+                .frame_rate
+                .map(|(n, d)| f64::from(n) / f64::from(d)),
+        }
+    }
+
+    /// Stops the decoder of a video (ffmpeg) so that a reader blocked on it returns; nothing for
+    /// other sources.
+    pub fn stopper(&self) -> Option<crate::video::FfmpegHandle> {
+        match self {
+            Source::Video { ffmpeg, .. } => Some(ffmpeg.clone()),
+            _ => None,
         }
     }
 }
@@ -848,7 +932,7 @@ pub struct Sequence {
 }
 
 /// Opens the sequence named by a `track run` argument: `-` (Y4M on standard input), a `.y4m`
-/// file, an OTB folder (`img/` and `groundtruth_rect.txt`; a folder with only `img/` is read as
+/// file, any other file as a video decoded by ffmpeg ([`crate::video`]), an OTB folder (`img/` and `groundtruth_rect.txt`; a folder with only `img/` is read as
 /// that image folder without ground truth), or a folder of images.
 ///
 /// # Errors
@@ -872,15 +956,17 @@ pub fn open_sequence(spec: &str) -> Result<Sequence> {
         return Err(AppError::input(path, "no such file or folder"));
     }
     if path.is_file() {
-        let is_y4m = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("y4m"));
-        if !is_y4m {
-            return Err(AppError::input(
-                path,
-                "not a sequence: expected a folder of images, an OTB folder, a .y4m file or -",
-            ));
+        if crate::video::is_video_path(path) {
+            let (reader, ffmpeg) = crate::video::FfmpegReader::spawn(path)?;
+            return Ok(Sequence {
+                kind: SequenceKind::Video,
+                source: Source::Video {
+                    frames: Y4mSource::from_reader(reader, path)?,
+                    ffmpeg,
+                },
+                groundtruth: None,
+                name,
+            });
         }
         return Ok(Sequence {
             kind: SequenceKind::Y4mFile,
@@ -892,6 +978,13 @@ pub fn open_sequence(spec: &str) -> Result<Sequence> {
     let img = path.join("img");
     if img.is_dir() {
         let gt = path.join("groundtruth_rect.txt");
+        if gt.exists() && !gt.is_file() {
+            return Err(AppError::input(
+                &gt,
+                "not a file: an OTB folder's ground truth must be a text file of x,y,w,h lines \
+                 (this is a folder or a special file)",
+            ));
+        }
         let has_gt = gt.is_file();
         return Ok(Sequence {
             kind: if has_gt {

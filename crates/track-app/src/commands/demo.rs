@@ -12,7 +12,9 @@ use crate::groundtruth::Box2;
 use crate::metrics::evaluate;
 use crate::output::write_atomic;
 use crate::plots::{all_figures, write_figures};
-use crate::record::{Summary, boxes_string, status_counts, write_csv, write_summary};
+use crate::record::{
+    CsvColumns, Summary, boxes_string, status_counts, write_csv_with, write_summary,
+};
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
 use crate::session::{ColourBy, DrawOptions};
@@ -60,6 +62,8 @@ pub fn run(args: &Args) -> Result<()> {
         return Err(AppError::setting("--particles", "must be at least 1"));
     }
     let config = preset.config(args.particles, args.seed);
+    // An output folder that cannot be made (a file in its place) is found before the work.
+    crate::output::probe_dir(&args.out)?;
     let seq = SyntheticSequence::render(args.scenario.into(), None, args.seed, &[])?;
     let draw = DrawOptions {
         colour_by: args.colour_by,
@@ -75,7 +79,11 @@ pub fn run(args: &Args) -> Result<()> {
         written.push(name);
     }
     write_gif(&args.out.join("track.gif"), &output.overlays, 80)?;
-    write_csv(&args.out.join("track.csv"), records)?;
+    write_csv_with(
+        &args.out.join("track.csv"),
+        records,
+        CsvColumns::of_tracker(&config),
+    )?;
     write_atomic(
         &args.out.join("boxes.txt"),
         boxes_string(records)?.as_bytes(),
@@ -118,6 +126,7 @@ pub fn run(args: &Args) -> Result<()> {
         frames: records.len(),
         width: seq.frames.first().map_or(0, |f| f.gray.width),
         height: seq.frames.first().map_or(0, |f| f.gray.height),
+        frame_rate: None,
         initial_box: Some(seq.initial_ellipse()?.bounding_box()),
         seconds: output.seconds,
         fps: records.len() as f64 / output.seconds.max(1e-9),

@@ -11,7 +11,7 @@ use crate::evaluation::{
     SyntheticSequence, TABLE1_COLUMNS, TABLE1_TRACKERS, switching_csv, switching_markdown,
     switching_scores, table1, table1_csv, table1_markdown,
 };
-use crate::groundtruth::{check_groundtruth_len, first_labelled, load_groundtruth};
+use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
 use crate::metrics::{SequenceMetrics, evaluate, mean_metrics, with_self_evaluation};
 use crate::output::write_atomic;
 use crate::sequence::{FrameSource, open_sequence};
@@ -179,6 +179,7 @@ pub fn run(args: &Args) -> Result<()> {
                 positive("--frames", *f)?;
             }
             let trackers = presets(trackers, &TABLE1_TRACKERS)?;
+            crate::output::probe_dir(out)?;
             let seq = SyntheticSequence::render((*scenario).into(), *frames, *scene_seed, set)?;
             let bar = progress(
                 (trackers.len() * TABLE1_COLUMNS.len()) as u64,
@@ -218,6 +219,7 @@ pub fn run(args: &Args) -> Result<()> {
                 trackers,
                 &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full],
             )?;
+            crate::output::probe_dir(out)?;
             let mut rows = Vec::new();
             for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
                 let seq = SyntheticSequence::render(scenario, *frames, 1, &[])?;
@@ -264,6 +266,9 @@ pub fn run(args: &Args) -> Result<()> {
                 // With a file, the preset name is not read.
                 runs.push(tracker_config("", Some(path), overrides())?);
             }
+            // Results are written after every sequence is tracked: an output folder that cannot
+            // be made is found before that.
+            crate::output::probe_dir(out)?;
             let mut rows: Vec<(String, String, SequenceMetrics)> = Vec::new();
             for config in &runs {
                 let mut per_tracker = Vec::new();
@@ -302,8 +307,7 @@ fn evaluate_otb(dir: &Path, config: &TrackerConfig, quiet: bool) -> Result<Seque
     let truth = load_groundtruth(&gt_path)?;
     check_groundtruth_len(&truth, info.frames, &gt_path)?;
     let (start, init_box) =
-        first_labelled(&truth).ok_or_else(|| AppError::input(&gt_path, "no labelled frame"))?;
-    init_box.validate_in_frame(info.width, info.height, "the first ground-truth box")?;
+        first_box_in_frame(&truth, &gt_path, &sequence.name, info.width, info.height)?;
     let init = init_box.inscribed_ellipse();
     let tracker = &config.name;
     let mut session = Session::new(

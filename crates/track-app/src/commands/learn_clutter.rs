@@ -106,7 +106,7 @@ pub fn run(args: &Args) -> Result<()> {
 
 /// Loads an image as row-major grey f32 in 0–255 grey levels.
 fn load_grey(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
-    let img = image::open(path).map_err(|e| AppError::input(path, e.to_string()))?;
+    let img = crate::sequence::decode_image(path)?;
     let grey = img.to_luma32f();
     let (w, h) = grey.dimensions();
     let data = grey.into_raw().into_iter().map(|v| v * 255.0).collect();

@@ -53,7 +53,8 @@ pub struct Args {
     /// Also estimate a global intensity offset.
     #[arg(long)]
     pub offset: bool,
-    /// Origin x,y of the model's coordinates; default the region's centre.
+    /// Origin x,y of the model's coordinates; default the region's centre. At most one frame
+    /// width (height) outside the frames.
     #[arg(long, value_name = "x,y")]
     pub origin: Option<String>,
     /// Print one JSON object instead of text.
@@ -64,9 +65,11 @@ pub struct Args {
 /// Runs `track motion`.
 ///
 /// # Errors
-/// [`AppError::InvalidSetting`] for malformed `--roi` / `--origin`, [`AppError::BadInput`] for
-/// unreadable or mismatched images, [`AppError::Computation`] when the estimate fails (for example
-/// a textureless region).
+/// [`AppError::InvalidSetting`] for a malformed `--roi` / `--origin`, a `--roi` outside the
+/// frames or too small, an `--origin` too far from them; [`AppError::BadInput`] for unreadable or
+/// mismatched images; [`AppError::Computation`] (exit 1) when the estimate fails (for example a
+/// textureless region) or must not be reported ([`assess`]): with `--json` a failure object is
+/// printed first.
 pub fn run(args: &Args) -> Result<()> {
     let roi = args
         .roi
@@ -103,14 +106,12 @@ pub fn run(args: &Args) -> Result<()> {
         }
         None => None,
     };
+    if let Some(o) = origin {
+        check_origin(o, w, h)?;
+    }
     let region = match (&roi, &mask) {
         (Some(r), _) => {
-            if r[2] <= 0.0 || r[3] <= 0.0 {
-                return Err(AppError::setting(
-                    "--roi",
-                    "width and height must be positive",
-                ));
-            }
+            check_roi(r, w, h)?;
             Region::Rect {
                 x: r[0],
                 y: r[1],
@@ -140,9 +141,27 @@ pub fn run(args: &Args) -> Result<()> {
             motion_est::Error::InvalidSetting { name, .. } => {
                 AppError::setting(name, e.to_string())
             }
+            // A region too small for the model is the region's fault: the option that gave it.
+            motion_est::Error::RegionTooSmall { .. } if roi.is_some() => {
+                AppError::setting("--roi", e.to_string())
+            }
+            motion_est::Error::RegionTooSmall { .. } if mask.is_some() => {
+                AppError::setting("--mask", e.to_string())
+            }
             other => AppError::computation("motion estimation", other),
         })?;
     let millis = start.elapsed().as_secs_f64() * 1e3;
+    if let Err(reason) = assess(&est) {
+        // A failed estimate is never printed as a result: JSON gets an explicit failure status
+        // without parameters or covariance, text only the error line; the exit code is 1.
+        if args.json {
+            crate::output::println_stdout(&failure_json(&est, &reason, millis))?;
+        }
+        return Err(AppError::computation(
+            "motion estimation failed",
+            format!("{reason}; no motion is reported"),
+        ));
+    }
     let out = if args.json {
         to_json(&est, millis)
     } else {
@@ -151,12 +170,148 @@ pub fn run(args: &Args) -> Result<()> {
     crate::output::println_stdout(&out)
 }
 
-/// The JSON object of the issue: model, params, covariance (row-major), origin, scale,
+/// Checks that `--roi` has a positive size and overlaps the `w`×`h` frames.
+///
+/// # Errors
+/// [`AppError::InvalidSetting`] naming `--roi`.
+fn check_roi(r: &[f64; 4], w: usize, h: usize) -> Result<()> {
+    if r[2] <= 0.0 || r[3] <= 0.0 {
+        return Err(AppError::setting(
+            "--roi",
+            "width and height must be positive",
+        ));
+    }
+    let (wf, hf) = (w as f64, h as f64);
+    if r[0] >= wf || r[1] >= hf || r[0] + r[2] <= 0.0 || r[1] + r[3] <= 0.0 {
+        return Err(AppError::setting(
+            "--roi",
+            format!(
+                "the rectangle {} lies outside the {w}×{h} frames",
+                r.map(crate::groundtruth::fmt_num).join(",")
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// How far outside the frames `--origin` may lie, in frame widths and heights. The model's
+/// coordinates are taken relative to the origin; an origin far from the pixels makes the
+/// affine normal equations so ill-conditioned that the covariance loses its meaning (an origin
+/// at (10⁶, 10⁶) gave a negative variance).
+pub const ORIGIN_REACH: f64 = 1.0;
+
+/// Checks that `--origin` lies within [`ORIGIN_REACH`] frame sizes of the `w`×`h` frames.
+///
+/// # Errors
+/// [`AppError::InvalidSetting`] naming `--origin` and the range allowed.
+fn check_origin(o: [f64; 2], w: usize, h: usize) -> Result<()> {
+    let (wf, hf) = (w as f64, h as f64);
+    let (x0, x1) = (-ORIGIN_REACH * wf, (1.0 + ORIGIN_REACH) * wf);
+    let (y0, y1) = (-ORIGIN_REACH * hf, (1.0 + ORIGIN_REACH) * hf);
+    if !(x0..=x1).contains(&o[0]) || !(y0..=y1).contains(&o[1]) {
+        return Err(AppError::setting(
+            "--origin",
+            format!(
+                "{},{} is too far from the {w}×{h} frames: x must lie in [{x0}, {x1}] and y in \
+                 [{y0}, {y1}] (an origin far from the pixels makes the estimate ill-conditioned)",
+                crate::groundtruth::fmt_num(o[0]),
+                crate::groundtruth::fmt_num(o[1]),
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Relative tolerance of the positive semi-definiteness check: an eigenvalue below
+/// `−PSD_TOLERANCE × the largest one` is a real negative variance, not rounding.
+const PSD_TOLERANCE: f64 = 1e-9;
+
+/// Whether an estimate may be reported as a result: finite parameters, a covariance that is
+/// finite, symmetric and positive semi-definite with a positive variance for every parameter,
+/// and an estimate that converged and that motion-est flags as reliable.
+///
+/// # Errors
+/// Why the estimate must not be reported.
+pub fn assess(est: &MotionEstimate) -> std::result::Result<(), String> {
+    let n = est.params.len();
+    if est.params.iter().any(|v| !v.is_finite()) {
+        return Err("the parameters are not finite".to_owned());
+    }
+    if est.covariance.len() != n * n || est.covariance.iter().any(|v| !v.is_finite()) {
+        return Err("the covariance is not finite".to_owned());
+    }
+    let c = nalgebra::DMatrix::from_row_slice(n, n, &est.covariance);
+    let scale = c.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if (&c - c.transpose()).amax() > PSD_TOLERANCE * scale.max(f64::MIN_POSITIVE) {
+        return Err("the covariance is not symmetric".to_owned());
+    }
+    if let Some(i) = (0..n).find(|&i| c[(i, i)] <= 0.0) {
+        return Err(format!(
+            "the variance of parameter {i} is {}, not positive: the covariance is not positive \
+             definite",
+            c[(i, i)]
+        ));
+    }
+    let eig = nalgebra::SymmetricEigen::new(0.5 * (&c + c.transpose())).eigenvalues;
+    let (min, max) = eig.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), &v| {
+        (lo.min(v), hi.max(v))
+    });
+    if min < -PSD_TOLERANCE * max {
+        return Err(format!(
+            "the covariance is not positive semi-definite (eigenvalue {min:e})"
+        ));
+    }
+    if !est.converged {
+        return Err(format!(
+            "the estimate did not converge at full resolution (iterations per level {:?})",
+            est.iterations
+        ));
+    }
+    if !est.reliable {
+        return Err(format!(
+            "motion-est flags the estimate unreliable: no dominant motion could be separated \
+             (inliers {:.1} %, noise scale {:.3} grey levels)",
+            100.0 * est.inlier_fraction,
+            est.scale
+        ));
+    }
+    Ok(())
+}
+
+/// The JSON object of a failed estimate: `"status": "failed"`, the reason and the diagnostics,
+/// but no `params` and no `covariance`, which do not describe the region's motion.
+fn failure_json(est: &MotionEstimate, reason: &str, millis: f64) -> String {
+    serde_json::json!({
+        "status": "failed",
+        "reason": reason,
+        "model": est.spec.model.name(),
+        "offset": est.spec.offset,
+        "origin": est.origin,
+        "scale": finite_or_null(est.scale),
+        "inlier_fraction": finite_or_null(est.inlier_fraction),
+        "iterations": est.iterations,
+        "converged": est.converged,
+        "reliable": est.reliable,
+        "millis": millis,
+    })
+    .to_string()
+}
+
+fn finite_or_null(v: f64) -> serde_json::Value {
+    if v.is_finite() {
+        serde_json::json!(v)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+/// The JSON object of a reliable estimate ([`assess`]): status `ok`, model, params, covariance (row-major), origin, scale,
 /// inlier_fraction, iterations (per level, 0 = full resolution), converged, reliable (false when
 /// the dominant motion could not be separated from the rest: treat the estimate as failed;
 /// `motion_est::MotionEstimate::reliable`), millis.
 fn to_json(est: &MotionEstimate, millis: f64) -> String {
     let value = serde_json::json!({
+        "status": "ok",
         "model": est.spec.model.name(),
         "offset": est.spec.offset,
         "params": est.params,
@@ -218,7 +373,7 @@ fn parse_floats<const N: usize>(name: &str, s: &str) -> Result<[f64; N]> {
 
 /// Loads an image as grey f32 in 0–255 (16-bit images keep their precision).
 fn load_grey(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
-    let img = image::open(path).map_err(|e| AppError::input(path, e.to_string()))?;
+    let img = crate::sequence::decode_image(path)?;
     let grey = img.into_luma16();
     let (w, h) = (grey.width() as usize, grey.height() as usize);
     let data = grey

@@ -7,14 +7,15 @@ use indicatif::{ProgressBar, ProgressStyle};
 use trackers::{Preset, TrackerConfig};
 
 use crate::groundtruth::{
-    Box2, Ellipse, check_groundtruth_len, first_labelled, load_groundtruth, parse_box_arg,
+    Box2, Ellipse, check_groundtruth_len, first_box_in_frame, load_groundtruth, parse_box_arg,
     parse_ellipse_arg,
 };
 use crate::metrics::{SequenceMetrics, evaluate};
 use crate::output::write_atomic;
 use crate::plots::{all_figures, write_figures};
 use crate::record::{
-    FrameRecord, Interruption, Summary, TrackerStatus, status_counts, write_csv, write_summary,
+    CsvColumns, FrameRecord, Interruption, Summary, TrackerStatus, status_counts, write_csv_with,
+    write_summary,
 };
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
@@ -40,12 +41,15 @@ pub const STRIP_FRAMES: usize = 8;
 #[command(after_help = "Examples:\n  \
     track run ../shared/data/real/girl_mil --tracker m3 --out girl --overlay --report\n  \
     track run frames/ --init 120,40,60,70 --tracker w-eval --plots\n  \
+    track run clip.mp4 --init 100,80,60,70 --out clip --overlay\n  \
     ffmpeg -i video.mp4 -f yuv4mpegpipe - | track run - --init 100,80,60,70 --out video\n\n\
     Outputs in --out: track.csv, boxes.txt, summary.json; overlay/NNNN.png (--overlay), track.gif \
     (--gif), plots/*.svg (--plots), report.html (--report).")]
 pub struct Args {
-    /// A folder of images (sorted by name), an OTB folder (img/ + groundtruth_rect.txt), a .y4m
-    /// file, or - for Y4M on standard input.
+    /// A folder of images (PNG, JPEG, GIF, BMP, WebP, TIFF; in natural order of their names), an
+    /// OTB folder (img/ + groundtruth_rect.txt), a video file (.mp4, .mov, .avi, .mkv, …: any file
+    /// but .y4m, decoded by ffmpeg, which must be on PATH), a .y4m file, or - for Y4M on standard
+    /// input.
     pub sequence: String,
     /// Tracker preset: head (recommended for real footage), m1, m2, m3, w-fixed, w-switch, w-hmm,
     /// w-occ, w-eval, full.
@@ -60,7 +64,8 @@ pub struct Args {
     /// Initial box x,y,w,h on the first frame (default: the first labelled box of an OTB folder).
     #[arg(long, value_parser = parse_box, conflicts_with = "init_ellipse")]
     pub init: Option<Box2>,
-    /// Initial ellipse cx,cy,a,b,angle (angle in radians) on the first frame.
+    /// Initial ellipse cx,cy,a,b,angle (angle in radians) on the first frame. Only the w-*
+    /// trackers rotate; the others refuse an angle that is not a multiple of π/2.
     #[arg(long, value_parser = parse_ellipse)]
     pub init_ellipse: Option<Ellipse>,
     /// A tracker configuration (JSON or TOML, the `TrackerConfig` of the trackers crate); replaces
@@ -131,54 +136,131 @@ pub struct Overrides {
 /// The tracker configuration from `--config` or the preset, with the command-line overrides
 /// applied, validated.
 ///
+/// Each error names what is at fault: the configuration file (`--config`) or the preset
+/// (`--tracker`) for their own values, and the option for an override (`--particles`,
+/// `--edge-threshold`), so a bad override is never blamed on the file.
+///
 /// # Errors
-/// [`AppError::InvalidSetting`] for an unknown preset or an invalid value;
-/// [`AppError::BadInput`] for an unreadable or malformed configuration file.
+/// [`AppError::InvalidSetting`] (exit 2) for an unknown preset, a configuration file that cannot
+/// be read or parsed or holds an invalid value (the file is a setting, like the options that
+/// override it), or an invalid override.
 pub fn tracker_config(preset: &str, config: Option<&Path>, o: Overrides) -> Result<TrackerConfig> {
     let mut c = match config {
-        Some(path) => load_config(path)?,
-        None => Preset::from_name(preset)
-            .map_err(|e| AppError::setting("--tracker", e.to_string()))?
-            .config(DEFAULT_PARTICLES, DEFAULT_SEED),
+        Some(path) => {
+            let c = load_config(path)?;
+            c.validate()
+                .map_err(|e| config_error(path, e.to_string()))?;
+            c
+        }
+        None => {
+            let c = Preset::from_name(preset)
+                .map_err(|e| AppError::setting("--tracker", e.to_string()))?
+                .config(DEFAULT_PARTICLES, DEFAULT_SEED);
+            c.validate()
+                .map_err(|e| AppError::setting("--tracker", e.to_string()))?;
+            c
+        }
     };
-    if let Some(n) = o.particles {
-        c.particles = n;
-    }
     if let Some(s) = o.seed {
         c.seed = s;
     }
+    c.filter.parallel |= o.parallel;
+    if let Some(n) = o.particles {
+        c.particles = n;
+        c.validate()
+            .map_err(|e| AppError::setting("--particles", e.to_string()))?;
+    }
     if let Some(t) = o.edge_threshold {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(AppError::setting(
+                "--edge-threshold",
+                format!("{t} is not a finite positive number of grey levels per pixel"),
+            ));
+        }
         if let Some(shape) = c.likelihood.shape.as_mut() {
             shape.lines.edge.threshold = t;
         }
         if let Some(clutter) = c.likelihood.clutter.as_mut() {
             clutter.lines.edge.threshold = t;
         }
+        c.validate()
+            .map_err(|e| AppError::setting("--edge-threshold", e.to_string()))?;
     }
-    c.filter.parallel |= o.parallel;
-    c.validate().map_err(|e| {
-        let name = if config.is_some() {
-            "--config"
-        } else {
-            "--particles"
-        };
-        AppError::setting(name, e.to_string())
-    })?;
     Ok(c)
+}
+
+/// An error in the configuration file `path`: exit 2, naming `--config` and the file.
+fn config_error(path: &Path, reason: impl std::fmt::Display) -> AppError {
+    AppError::setting("--config", format!("{}: {reason}", path.display()))
 }
 
 fn load_config(path: &Path) -> Result<TrackerConfig> {
     let text = std::fs::read_to_string(path)
-        .map_err(|e| AppError::input(path, format!("cannot read the configuration: {e}")))?;
+        .map_err(|e| config_error(path, format!("cannot read the configuration: {e}")))?;
     let is_toml = path
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
     if is_toml {
-        toml::from_str(&text).map_err(|e| AppError::input(path, format!("invalid TOML: {e}")))
+        toml::from_str(&text).map_err(|e| {
+            // toml's own message draws the line with a caret over several lines; one line here.
+            let at = e
+                .span()
+                .map(|span| {
+                    let before = &text[..span.start.min(text.len())];
+                    let line = before.matches('\n').count() + 1;
+                    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+                    format!(" at line {line}, column {column}")
+                })
+                .unwrap_or_default();
+            config_error(path, format!("invalid TOML{at}: {}", e.message().trim()))
+        })
     } else {
-        serde_json::from_str(&text).map_err(|e| AppError::input(path, format!("invalid JSON: {e}")))
+        serde_json::from_str(&text).map_err(|e| config_error(path, format!("invalid JSON: {e}")))
     }
+}
+
+/// Largest difference, in radians, between an `--init-ellipse` angle and a multiple of π/2 that
+/// an axis-aligned tracker accepts as that multiple (angles typed to six decimals).
+pub const AXIS_ANGLE_TOLERANCE: f64 = 1e-6;
+
+/// The ellipse `e` as the tracker of `config` can start from it, exactly.
+///
+/// Trackers in the affine shape space (`w-*`) represent any rotation. The others — Odobez's
+/// space (`m1`, `m2`, `m3`, `full`) and the region tracker (`head`) — track axis-aligned
+/// ellipses: an ellipse at a multiple of π/2 is written at angle 0 (the semi-axes swapped at odd
+/// multiples) and a circle at any angle is the same circle; any other angle cannot be represented
+/// (`m1` would start from the rotated ellipse's bounding ellipse, `head` would drop the angle), so
+/// it is refused rather than silently changed.
+///
+/// # Errors
+/// [`AppError::InvalidSetting`] naming `--init-ellipse` for a rotated, non-circular ellipse and a
+/// tracker that cannot rotate.
+pub fn initial_ellipse_for(e: &Ellipse, config: &TrackerConfig) -> Result<Ellipse> {
+    let rotates = config.region.is_none() && config.space == trackers::ShapeSpace::Affine;
+    if rotates {
+        return Ok(*e);
+    }
+    if e.a == e.b {
+        return Ok(Ellipse::new(e.cx, e.cy, e.a, e.b, 0.0));
+    }
+    let quarter = std::f64::consts::FRAC_PI_2;
+    let k = (e.angle / quarter).round();
+    if (e.angle - k * quarter).abs() <= AXIS_ANGLE_TOLERANCE {
+        let odd = k.rem_euclid(2.0) == 1.0;
+        let (a, b) = if odd { (e.b, e.a) } else { (e.a, e.b) };
+        return Ok(Ellipse::new(e.cx, e.cy, a, b, 0.0));
+    }
+    Err(AppError::setting(
+        "--init-ellipse",
+        format!(
+            "the {} tracker follows axis-aligned ellipses only, so it cannot start from an \
+             ellipse at angle {} rad; give an angle that is a multiple of π/2 (or --init x,y,w,h), \
+             or use a tracker that rotates (w-fixed, w-switch, w-hmm, w-occ, w-eval)",
+            config.name,
+            crate::groundtruth::fmt_num(e.angle)
+        ),
+    ))
 }
 
 /// A progress bar on standard error, hidden when `quiet`.
@@ -300,12 +382,14 @@ pub fn run(args: &Args) -> Result<()> {
         (None, Some(e), _) => {
             e.bounding_box()
                 .validate_in_frame(width, height, "--init-ellipse")?;
-            (0, e)
+            (0, initial_ellipse_for(&e, &config)?)
         }
         (None, None, Some(t)) => {
-            let (k, b) = first_labelled(t)
-                .ok_or_else(|| AppError::setting("--init", "the ground truth labels no frame"))?;
-            b.validate_in_frame(width, height, "the first ground-truth box")?;
+            let path = sequence
+                .groundtruth
+                .as_deref()
+                .unwrap_or(Path::new("ground truth"));
+            let (k, b) = first_box_in_frame(t, path, &sequence.name, width, height)?;
             (k, b.inscribed_ellipse())
         }
         (None, None, None) => {
@@ -342,6 +426,8 @@ pub fn run(args: &Args) -> Result<()> {
     bar.set_message(format!("{} on {}", config.name, sequence.name));
 
     let (tx, rx) = std::sync::mpsc::sync_channel::<Incoming>(1);
+    let frame_rate = sequence.source.frame_rate();
+    let decoder = sequence.source.stopper();
     let mut source = sequence.source;
     let reader = std::thread::spawn(move || {
         loop {
@@ -411,6 +497,11 @@ pub fn run(args: &Args) -> Result<()> {
     if stop.is_none() {
         // The reader has ended (end of input or error already received); it never blocks here.
         let _ = reader.join();
+    } else if let Some(ffmpeg) = &decoder {
+        // A video's decoder is stopped and reaped now, not left to run to the end of the file;
+        // its reader then sees the end of its input and ends too.
+        ffmpeg.stop();
+        let _ = reader.join();
     }
     // A signal that arrived while the last frames were read still marks the run as interrupted.
     if stop.is_none()
@@ -444,7 +535,11 @@ pub fn run(args: &Args) -> Result<()> {
         frames_read,
     });
 
-    write_csv(&args.out.join("track.csv"), &records)?;
+    write_csv_with(
+        &args.out.join("track.csv"),
+        &records,
+        CsvColumns::of_tracker(&config),
+    )?;
     write_atomic(
         &args.out.join("boxes.txt"),
         boxes_with_gap(start, &records).as_bytes(),
@@ -485,6 +580,7 @@ pub fn run(args: &Args) -> Result<()> {
         frames: records.len(),
         width,
         height,
+        frame_rate,
         initial_box: Some(init.bounding_box()),
         seconds: output.seconds,
         fps: records.len() as f64 / output.seconds.max(1e-9),
