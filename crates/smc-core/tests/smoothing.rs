@@ -533,9 +533,11 @@ fn ffbsm_matches_rts_in_2d() {
 fn ffbs_matches_rts_in_2d_with_both_backward_draws() {
     // Measured over 20 seeds at N = M = 500, 25 steps, exact draw: worst mean error
     // 0.294 ± 0.065 σ (largest 0.425), RMS 0.128 ± 0.021 σ; worst relative variance error
-    // 0.389 ± 0.080 (largest 0.529), RMS 0.149 ± 0.023. Accept–reject (many draws fall back to
-    // the exact draw here: the transition is narrow beside the filter's spread): 0.298 ± 0.056
-    // (0.386), 0.132 ± 0.024; 0.392 ± 0.107 (0.645), 0.145 ± 0.031.
+    // 0.389 ± 0.080 (largest 0.529), RMS 0.149 ± 0.023. Accept–reject with a budget of 10
+    // proposals (many draws fell back to the exact draw: the transition is narrow beside the
+    // filter's spread): 0.298 ± 0.056 (0.386), 0.132 ± 0.024; 0.392 ± 0.107 (0.645),
+    // 0.145 ± 0.031. The draw is exact whatever the budget, so the same spread applies to the
+    // default budget used here.
     for seed in SEEDS {
         check(
             "FFBS exact 2-D",
@@ -561,7 +563,7 @@ fn rejection_sampler_accepts_and_falls_back_within_its_budget() {
     let zs = simulate_1d();
     let mut filter = filter_1d(500, 9, &zs, filter_settings(1.0, false));
     let history = filter.take_history().unwrap();
-    for max_rejections in [1, 10] {
+    for max_rejections in [Some(1), Some(10), None] {
         let settings = SmootherSettings {
             backward: BackwardMethod::Rejection,
             max_rejections,
@@ -571,8 +573,10 @@ fn rejection_sampler_accepts_and_falls_back_within_its_budget() {
         let s = paths.stats();
         assert_eq!(s.draws, 500 * (STEPS as u64 - 1));
         assert_eq!(s.accepted + s.exact, s.draws);
-        assert!(s.accepted > 0 && s.exact > 0, "{s:?}");
-        assert!(s.proposals <= max_rejections as u64 * s.draws);
+        // A budget of one or ten proposals leaves some draws to the exact fallback.
+        assert!(s.accepted > 0, "{s:?}");
+        assert!(max_rejections.is_none() || s.exact > 0, "{s:?}");
+        assert!(s.proposals <= max_rejections.unwrap_or(500) as u64 * s.draws);
     }
     let exact = SmootherSettings {
         backward: BackwardMethod::Exact,
@@ -867,7 +871,7 @@ fn bad_input_gives_typed_errors() {
             ..SmootherSettings::default()
         },
         SmootherSettings {
-            max_rejections: 0,
+            max_rejections: Some(0),
             ..SmootherSettings::default()
         },
         SmootherSettings {

@@ -261,7 +261,8 @@ impl<S, T: TransitionDensity<State = S> + ?Sized> BackwardStep<'_, S, T> {
         if let Some(log_bound) = bound {
             // Accept–reject (S4): propose I ~ W_t, accept with probability f / ε̄.
             let slack = 1e-9 * log_bound.abs().max(1.0);
-            for _ in 0..self.settings.max_rejections {
+            let budget = self.settings.max_rejections.unwrap_or(self.previous.len());
+            for _ in 0..budget {
                 proposals += 1;
                 let i = self.table.sample(&mut rng);
                 let lf = check_log_density(

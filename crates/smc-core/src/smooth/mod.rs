@@ -31,9 +31,9 @@
 //!   space hidden Markov models", the accept–reject backward sampler), with expected O(1) cost per
 //!   draw when the bound is tight. Because the acceptance rate can be tiny (a peaked transition
 //!   against widely spread particles), at most [`SmootherSettings::max_rejections`] proposals are
-//!   tried before the exact O(N) draw takes over (the hybrid scheme of Dau & Chopin 2023,
-//!   "On backward smoothing algorithms", Annals of Statistics): the draw is exact either way and
-//!   never spins.
+//!   tried before the exact O(N) draw takes over (the hybrid scheme of Dau & Chopin 2022,
+//!   "On the complexity of backward smoothing algorithms", arXiv:2207.00976): the draw is exact
+//!   either way and never spins.
 //! - **Fixed lag** ([`fixed_lag_weights`]): the recursion (S2) from the last frame T down to
 //!   frame T − L reads only those L + 1 frames, and gives the FFBSm approximation of
 //!   p(x_{T−L} | z_{0:T}). Near-online use takes this as the estimate of frame T − L once frame T
@@ -129,8 +129,13 @@ pub struct SmootherSettings {
     /// depend on the thread count, only on this setting.
     pub block_columns: usize,
     /// FFBS: proposals tried by accept–reject (S4) for one trajectory at one step before the
-    /// exact draw takes over (default 10). Must be at least 1.
-    pub max_rejections: usize,
+    /// exact draw takes over. `None` (the default) allows N_t, the number of particles of the
+    /// frame drawn from, as Dau & Chopin (2022) suggest: a draw then costs at most about twice
+    /// the exact one, and a bounded number of evaluations when the acceptance rate is reasonable.
+    /// A small fixed budget makes the rare fallbacks (next states far in the tails of the
+    /// filter, where the acceptance rate is tiny) dominate the cost at large N. `Some(0)` is
+    /// invalid.
+    pub max_rejections: Option<usize>,
     /// FFBS: how to draw from the backward kernel (default [`BackwardMethod::Auto`]).
     pub backward: BackwardMethod,
     /// Spread columns (FFBSm) or trajectories (FFBS) over the rayon pool (default `false`).
@@ -144,7 +149,7 @@ impl Default for SmootherSettings {
     fn default() -> Self {
         Self {
             block_columns: 256,
-            max_rejections: 10,
+            max_rejections: None,
             backward: BackwardMethod::Auto,
             parallel: false,
             parallel_min_chunk: 16,
@@ -161,7 +166,7 @@ impl SmootherSettings {
     pub fn validate(&self) -> Result<()> {
         for (name, value) in [
             ("block_columns", self.block_columns),
-            ("max_rejections", self.max_rejections),
+            ("max_rejections", self.max_rejections.unwrap_or(1)),
             ("parallel_min_chunk", self.parallel_min_chunk),
         ] {
             if value == 0 {
