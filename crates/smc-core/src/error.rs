@@ -99,6 +99,40 @@ pub enum Error {
         /// The declared number of labels.
         n_labels: usize,
     },
+    /// A smoother was handed a history with no frame.
+    #[error("the history holds no frame")]
+    EmptyHistory,
+    /// A frame after the first has no recorded ancestors, so its genealogy is unknown.
+    #[error("frame {frame} of the history has no recorded ancestors")]
+    MissingAncestors {
+        /// Index of the frame in the history.
+        frame: usize,
+    },
+    /// The backward kernel from a particle of frame `frame + 1` to frame `frame` cannot be
+    /// normalised: every filtering weight of frame `frame` times the transition density to that
+    /// particle is zero, or a transition log-density is NaN or +∞.
+    #[error("degenerate backward kernel from particle {particle} of frame {} to frame {frame}: {reason}", frame + 1)]
+    DegenerateBackward {
+        /// Index (in the history) of the frame the kernel points into.
+        frame: usize,
+        /// Index of the particle in frame `frame + 1`.
+        particle: usize,
+        /// What is wrong.
+        reason: Degeneracy,
+    },
+    /// A transition log-density exceeded the upper bound declared by
+    /// [`crate::model::TransitionDensity::log_density_bound`], which the rejection sampler relies on.
+    #[error(
+        "transition log-density {log_density} into frame {frame} exceeds its declared bound {log_bound}"
+    )]
+    BoundExceeded {
+        /// Index (in the history) of the frame of the next state.
+        frame: usize,
+        /// The log-density found.
+        log_density: f64,
+        /// The bound declared for it.
+        log_bound: f64,
+    },
 }
 
 impl Error {

@@ -20,6 +20,7 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::history::{History, HistorySettings};
 use crate::model::{Bootstrap, Dynamics, Observation, Proposal};
 use crate::particles::{ParticleSet, check_len};
 use crate::resample::{Resampler, count_distinct};
@@ -41,6 +42,11 @@ pub struct FilterSettings {
     pub parallel: bool,
     /// Smallest number of particles handed to one rayon task (default 64).
     pub parallel_min_chunk: usize,
+    /// Record every step's weighted particles and ancestors in a [`History`] for the smoothers of
+    /// [`crate::smooth`] (see [`ParticleFilter::history`]). `None` (the default) records nothing
+    /// and costs nothing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub history: Option<HistorySettings>,
 }
 
 impl Default for FilterSettings {
@@ -50,6 +56,7 @@ impl Default for FilterSettings {
             output_size: None,
             parallel: false,
             parallel_min_chunk: 64,
+            history: None,
         }
     }
 }
@@ -59,7 +66,7 @@ impl FilterSettings {
     ///
     /// # Errors
     /// [`Error::InvalidSetting`] when the threshold is outside (0, 1] (or NaN), the output size is
-    /// zero, or the chunk size is zero.
+    /// zero, the chunk size is zero, or the history settings are invalid.
     pub fn validate(&self) -> Result<()> {
         let t = self.resample_threshold;
         if !(t > 0.0 && t <= 1.0) {
@@ -79,6 +86,9 @@ impl FilterSettings {
                 name: "parallel_min_chunk",
                 reason: "must be at least 1".into(),
             });
+        }
+        if let Some(history) = &self.history {
+            history.validate()?;
         }
         Ok(())
     }
@@ -160,6 +170,10 @@ pub struct ParticleFilter<S> {
     log_likelihoods: Vec<f64>,
     log_increments: Vec<f64>,
     seen: Vec<bool>,
+    /// The recorded forward pass, when the settings ask for one.
+    history: Option<History<S>>,
+    /// Whether `ancestors` were set by a resampling stage not yet recorded.
+    fresh_ancestors: bool,
 }
 
 impl<S: Clone + Send + Sync> ParticleFilter<S> {
@@ -169,7 +183,10 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
     /// [`Error::InvalidSetting`] from [`FilterSettings::validate`].
     pub fn new(settings: FilterSettings) -> Result<Self> {
         settings.validate()?;
+        let history = settings.history.map(History::new).transpose()?;
         Ok(Self {
+            history,
+            fresh_ancestors: false,
             settings,
             ancestors: Vec::new(),
             previous: Vec::new(),
@@ -199,6 +216,49 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
         &self.previous
     }
 
+    /// The recorded forward pass: one frame per completed weight stage (so one per
+    /// [`ParticleFilter::step`]), with the weighted set after the update and the ancestors chosen
+    /// by the resampling stage before it. `None` unless [`FilterSettings::history`] is set.
+    #[must_use]
+    pub fn history(&self) -> Option<&History<S>> {
+        self.history.as_ref()
+    }
+
+    /// Mutable access to the recorded history (for instance to clear it, or to push the initial
+    /// set by hand).
+    pub fn history_mut(&mut self) -> Option<&mut History<S>> {
+        self.history.as_mut()
+    }
+
+    /// Takes the recorded history, leaving an empty one with the same settings in its place.
+    /// `None` unless [`FilterSettings::history`] is set.
+    pub fn take_history(&mut self) -> Option<History<S>> {
+        let settings = *self.history.as_ref()?.settings();
+        // The settings were validated when the history was first built.
+        let empty = History::new(settings).ok()?;
+        self.history.replace(empty)
+    }
+
+    fn record(&mut self, set: &ParticleSet<S>, step: u64) {
+        let Some(history) = self.history.as_mut() else {
+            return;
+        };
+        // Ancestors are only known when the resampling stage ran since the last record and they
+        // index the previous frame; otherwise the genealogy of this frame is unknown.
+        let fits = self.fresh_ancestors
+            && self.ancestors.len() == set.len()
+            && history
+                .frame(history.len().wrapping_sub(1))
+                .is_none_or(|previous| self.ancestors.iter().all(|&a| a < previous.set.len()));
+        let ancestors = fits.then(|| self.ancestors.clone());
+        self.fresh_ancestors = false;
+        // The ancestors were checked above, so the push cannot fail; an unknown genealogy is
+        // recorded as such rather than failing a valid filter step.
+        if history.push(step, set.clone(), ancestors).is_err() {
+            let _ = history.push(step, set.clone(), None);
+        }
+    }
+
     fn chunk(&self, n: usize) -> usize {
         n.div_ceil(4 * rayon::current_num_threads().max(1))
             .max(self.settings.parallel_min_chunk)
@@ -222,6 +282,7 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
         let threshold = self.settings.resample_threshold;
         // Threshold 1 means "every step": do not let ESS = N(1 ± ε) decide.
         let resample = threshold >= 1.0 || ess < threshold * n as f64;
+        self.fresh_ancestors = true;
         if !resample {
             self.ancestors.clear();
             self.ancestors.extend(0..n);
@@ -385,6 +446,7 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
                 result?
             }
         };
+        self.record(set, step);
         let (_, max_weight) = set.max_weight();
         Ok(WeightReport {
             log_evidence_increment,

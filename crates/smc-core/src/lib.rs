@@ -19,6 +19,13 @@
 //! - [`estimate`]: weighted mean and covariance, maximum-weight particle, per-label mass and
 //!   label-conditional mean (Wu §4).
 //!
+//! - [`history`] and [`smooth`]: the filter records its weighted sets and ancestors when
+//!   [`FilterSettings::history`] asks for it; FFBSm smooths the marginals (O(N²) per step, with
+//!   `faer` for the dense products), backward simulation (FFBS) draws whole trajectories in O(N)
+//!   per trajectory and step, or O(1) expected with the accept–reject sampler of Douc et al.
+//!   (2011) when the transition density is bounded ([`TransitionDensity`]); a fixed-lag variant
+//!   serves near-online use.
+//!
 //! Degenerate weights (all −∞, a NaN or a +∞) are a typed [`Error::DegenerateWeights`] at the step
 //! where they appear.
 //!
@@ -65,18 +72,27 @@
 pub mod error;
 pub mod estimate;
 pub mod filter;
+pub mod history;
 pub mod model;
 pub mod particles;
 pub mod resample;
 pub mod rng;
+pub mod smooth;
 pub mod weights;
 
 pub use error::{Degeneracy, Error, Result};
 pub use estimate::{AsVector, LabelEstimate, MeanCovariance};
 pub use filter::{FilterSettings, ParticleFilter, ResampleReport, StepDiagnostics, WeightReport};
-pub use model::{Bootstrap, Dynamics, FnObservation, Observation, Proposal};
+pub use history::{Frame, History, HistorySettings};
+pub use model::{
+    Bootstrap, Dynamics, FnObservation, Observation, PriorDensity, Proposal, TransitionDensity,
+};
 pub use particles::{Labelled, ParticleSet};
 pub use resample::{
     Multinomial, Resampler, ResamplingScheme, Residual, Ssp, Stratified, Systematic,
     offspring_counts,
+};
+pub use smooth::{
+    BackwardMethod, SmoothedMarginals, SmootherSettings, Trajectories, sample_trajectories,
+    smooth_marginals,
 };

@@ -55,6 +55,18 @@ pub fn resampler_rng(seed: u64, step: u64) -> Pcg64Mcg {
     stream_rng(seed, step, RESAMPLER_STREAM)
 }
 
+/// Mixed into the seed of the backward smoothers, so that a smoother given the filter's seed
+/// does not replay the filter's particle streams.
+pub const BACKWARD_SALT: u64 = 0x6261_636B_7761_7264;
+
+/// The generator of backward trajectory `trajectory` at history frame `frame` (see
+/// [`crate::smooth`]).
+#[inline]
+#[must_use]
+pub fn backward_rng(seed: u64, frame: usize, trajectory: usize) -> Pcg64Mcg {
+    stream_rng(seed ^ BACKWARD_SALT, frame as u64, trajectory as u64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
