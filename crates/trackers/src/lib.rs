@@ -64,6 +64,7 @@ pub mod reacquire;
 pub mod region;
 pub mod space;
 pub mod tracker;
+pub mod visibility;
 
 pub use config::{
     ClutterMode, MotionSettings, OcclusionMode, PoseEstimator, Preset, ProposalKind, TrackerConfig,

@@ -21,6 +21,7 @@ use crate::particle::{Particle, default_status};
 use crate::proposal::{ClusterMotion, MotionProposal, state_increment};
 use crate::reacquire::{Reacquisition, TrackMemory};
 use crate::space::{STATE_SLOTS, ShapeBounds, StateVector, UNBOUNDED_CENTRE, axpy, pose_box};
+use crate::visibility::{self, Visibility};
 use crate::{Error, Result};
 
 /// What a tracker reports for one frame.
@@ -150,6 +151,8 @@ pub struct ParticleTracker {
     /// The memory after each of the last locked frames, oldest first: the anchor of the jump is
     /// the oldest (see [`crate::reacquire::ReacquisitionSettings::rollback`]).
     history: std::collections::VecDeque<TrackMemory>,
+    /// Whether a target is seen at all (with the status HMM only; see [`crate::visibility`]).
+    visibility: Option<Visibility>,
     size: (usize, usize),
     frame: usize,
 }
@@ -197,6 +200,7 @@ impl ParticleTracker {
             reference: ReferenceLines::default(),
             memory: TrackMemory::new([0.0; STATE_SLOTS], 0),
             history: std::collections::VecDeque::new(),
+            visibility: None,
             size: (0, 0),
             frame: 0,
             config,
@@ -506,6 +510,8 @@ impl Tracker for ParticleTracker {
         self.previous.clear();
         self.previous.extend_from_slice(frame.data());
         self.frame = 0;
+        self.visibility =
+            matches!(self.dynamics.occlusion, OcclusionModel::Status(_)).then(Visibility::default);
         self.last_state = centre;
         self.memory = TrackMemory::new(centre, 0);
         self.history.clear();
@@ -592,6 +598,10 @@ impl Tracker for ParticleTracker {
                 return Err(e.into());
             }
         };
+        let visibility = match &mut self.visibility {
+            Some(v) => Some(v.observe(&observation, self.config.space, &set, self.size)),
+            None => None,
+        };
         let estimated = self.estimate(&set);
         self.set = Some(set);
         let PosteriorSummary {
@@ -626,7 +636,10 @@ impl Tracker for ParticleTracker {
         });
         report.clutter = clutter;
         report.gamma = gamma;
-        report.status = status;
+        report.status = match (status, visibility) {
+            (Some(s), Some(unseen)) => Some(visibility::fuse(&s, unseen)),
+            (s, _) => s,
+        };
         report.motion_clusters = motion_clusters;
         report.millis = start.elapsed().as_secs_f64() * 1e3;
         Ok(report)

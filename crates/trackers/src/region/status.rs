@@ -41,7 +41,12 @@ impl LostChain {
 
     /// One forward step on the estimate's similarity `rho` to the target model.
     pub fn update(&mut self, rho: f64) {
-        let q = (rho - self.background_similarity) / (1.0 - self.background_similarity);
+        self.observe((rho - self.background_similarity) / (1.0 - self.background_similarity));
+    }
+
+    /// One forward step on an observation `q` already on the chain's scale: about 1 when the
+    /// target is held, about 0 when it is not.
+    pub fn observe(&mut self, q: f64) {
         let stay = self.persistence;
         let prior_lost = self.p_lost * stay + (1.0 - self.p_lost) * (1.0 - stay);
         let log_locked = -0.5 * ((q - LOCKED_Q) / SPREAD).powi(2);
