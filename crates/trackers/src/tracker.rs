@@ -599,7 +599,18 @@ impl Tracker for ParticleTracker {
             }
         };
         let visibility = match &mut self.visibility {
-            Some(v) => Some(v.observe(&observation, self.config.space, &set, self.size)),
+            Some(v) => {
+                let best = set
+                    .weights()
+                    .iter()
+                    .enumerate()
+                    .max_by(|a, b| a.1.total_cmp(b.1))
+                    .map(|(i, _)| i)
+                    .unwrap_or(0);
+                let pose = self.config.space.pose(&set.states()[best].now);
+                pose.to_ellipse()
+                    .map(|e| v.observe(frame.data(), self.size, &e))
+            }
             None => None,
         };
         let estimated = self.estimate(&set);

@@ -4,25 +4,27 @@
 //! Wu's status α is inferred from the occlusion degree γ, the share of measurement lines whose
 //! contour edge is hidden. In dense clutter (image noise, a checkerboard) every line finds an
 //! edge near any contour, γ stays low, and α̂ would say "locked" on a frame with no target in it.
-//! A target is seen when the observation singles out the estimate's place: the log-likelihood of
-//! the most probable particle, as if fully visible, is compared with the same contour moved
-//! [`SHIFT_RADII`] radii in [`SHIFTS`] directions, as a z-score
+//! A target is seen when its contour stands out from the rest of the image: the mean grey-level
+//! difference across the most probable particle's contour (one and a half pixels inside against
+//! outside, along the normal) is compared with the same contour moved [`SHIFT_RADII`] radii in
+//! [`SHIFTS`] directions, as a z-score
 //!
-//!   z = (ℓ(x̂) − mean_k ℓ(x̂ + d_k)) / sd_k ℓ(x̂ + d_k).
+//!   z = (c(x̂) − mean_k c(x̂ + d_k)) / sd_k c(x̂ + d_k).
 //!
-//! A filter that climbs a featureless likelihood still finds a local maximum, so noise gives z
-//! of one or two; a contour on a real target's edges stands out by several. z drives a two-state
+//! The contrast is read from the image, not from the preset's likelihood, so the test means the
+//! same for every preset (a likelihood-based score was tried: Wu's likelihood on his own
+//! `mclutter` scene scores a visible target no higher than noise). A filter that climbs a
+//! featureless image still finds a local maximum, so noise and a checkerboard give z of about
+//! −1 to 2; a contour on a real target's edges stands out by several. z drives a two-state
 //! (seen, unseen) chain, the same forward filter as the region tracker's
 //! ([`crate::region::status::LostChain`]); the reported α probabilities are Wu's given that the
 //! target is seen, and P(unseen) is added to "lost". The check only reports: the filter, its
 //! hidden processes and the reacquisition memory are the papers' as before.
 
+use contour_obs::Ellipse;
 use dbn_switch::{Status, StatusEstimate};
-use smc_core::{Observation, ParticleSet};
 
-use crate::particle::{Particle, default_status};
 use crate::region::status::LostChain;
-use crate::space::ShapeSpace;
 
 /// Directions the estimate's contour is moved to for the null placements.
 pub const SHIFTS: usize = 16;
@@ -30,14 +32,14 @@ pub const SHIFTS: usize = 16;
 pub const SHIFT_RADII: f64 = 1.5;
 /// z of an unseen target (a filter's local maximum on a featureless likelihood) and of a seen
 /// one; the chain reads q = (z − Z_UNSEEN) / (Z_SEEN − Z_UNSEEN), about 0 and 1.
-const Z_UNSEEN: f64 = 1.5;
-const Z_SEEN: f64 = 4.0;
+const Z_UNSEEN: f64 = 0.5;
+const Z_SEEN: f64 = 3.5;
 /// Bounds of q: one frame cannot outvote the chain's memory.
 const Q_RANGE: (f64, f64) = (-1.0, 2.0);
 /// Fewest null placements inside the frame for a z-score.
 const MIN_PLACEMENTS: usize = 6;
 /// Persistence of the seen/unseen chain.
-const PERSISTENCE: f64 = 0.9;
+const PERSISTENCE: f64 = 0.95;
 
 /// The seen/unseen chain of one track.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,23 +56,15 @@ impl Default for Visibility {
 }
 
 impl Visibility {
-    /// One forward step on the weighted set `set` under `observation`, for a frame of `size`;
-    /// returns P(unseen). A frame without enough placements inside it leaves the chain to its
-    /// prior.
-    pub fn observe<O: Observation<State = Particle>>(
-        &mut self,
-        observation: &O,
-        space: ShapeSpace,
-        set: &ParticleSet<Particle>,
-        size: (usize, usize),
-    ) -> f64 {
-        match saliency(observation, space, set, size) {
-            Some(z) => {
-                let q = ((z - Z_UNSEEN) / (Z_SEEN - Z_UNSEEN)).clamp(Q_RANGE.0, Q_RANGE.1);
-                self.chain.observe(q);
-            }
-            // No observation: the prediction step alone (an uninformative q halfway).
-            None => self.chain.observe(0.5),
+    /// One forward step on the estimate `estimate` in the grey frame `grey` of `size`; returns
+    /// P(unseen). A frame where the contour or too many null placements fall outside the frame
+    /// leaves the chain as it was.
+    pub fn observe(&mut self, grey: &[f32], size: (usize, usize), estimate: &Ellipse) -> f64 {
+        // Where no test is possible (the contour or its null placements leave the frame) the
+        // chain keeps its belief rather than drifting towards "unseen".
+        if let Some(z) = edge_saliency(grey, size, estimate) {
+            let q = ((z - Z_UNSEEN) / (Z_SEEN - Z_UNSEEN)).clamp(Q_RANGE.0, Q_RANGE.1);
+            self.chain.observe(q);
         }
         self.chain.p_lost()
     }
@@ -92,51 +86,61 @@ pub fn fuse(status: &StatusEstimate, unseen: f64) -> StatusEstimate {
     }
 }
 
-/// The z-score of the most probable particle's log-likelihood against its contour moved to the
-/// null placements inside the frame; `None` with too few placements or a non-finite spread.
-pub fn saliency<O: Observation<State = Particle>>(
-    observation: &O,
-    space: ShapeSpace,
-    set: &ParticleSet<Particle>,
-    size: (usize, usize),
-) -> Option<f64> {
-    let best = set
-        .weights()
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .map(|(i, _)| i)?;
-    let mut particle = *set.states().get(best)?;
-    particle.status = default_status();
-    let at_estimate = observation.log_likelihood(&particle);
-    let radius = space.scale(&particle.now);
-    let slots: Vec<usize> = (0..particle.now.len())
-        .filter(|&j| space.is_translation(j))
-        .collect();
-    let &[sx, sy] = slots.as_slice() else {
-        return None;
+/// Points read on a contour by [`edge_saliency`].
+const CONTOUR_POINTS: usize = 48;
+
+/// Mean absolute grey-level difference across the ellipse `e` (inside against outside, one
+/// pixel either side of the contour along its normal) at [`CONTOUR_POINTS`] points, and how
+/// many of them fell inside the frame.
+fn contour_contrast(grey: &[f32], (w, h): (usize, usize), e: &Ellipse) -> (f64, usize) {
+    let (c, s) = (e.theta.cos(), e.theta.sin());
+    let at = |x: f64, y: f64| -> Option<f64> {
+        let (i, j) = (x.round(), y.round());
+        (i >= 0.0 && j >= 0.0 && (i as usize) < w && (j as usize) < h)
+            .then(|| f64::from(grey[j as usize * w + i as usize]))
     };
+    let (mut sum, mut n) = (0.0, 0);
+    for k in 0..CONTOUR_POINTS {
+        let t = std::f64::consts::TAU * k as f64 / CONTOUR_POINTS as f64;
+        let (u, v) = (e.a * t.cos(), e.b * t.sin());
+        let (px, py) = (e.cx + c * u - s * v, e.cy + s * u + c * v);
+        // The normal of the ellipse at t, in the frame.
+        let (nu, nv) = (e.b * t.cos(), e.a * t.sin());
+        let norm = (nu * nu + nv * nv).sqrt().max(1e-12);
+        let (nx, ny) = ((c * nu - s * nv) / norm, (s * nu + c * nv) / norm);
+        let d = 1.5;
+        if let (Some(inner), Some(outer)) =
+            (at(px - d * nx, py - d * ny), at(px + d * nx, py + d * ny))
+        {
+            sum += (inner - outer).abs();
+            n += 1;
+        }
+    }
+    (if n > 0 { sum / n as f64 } else { 0.0 }, n)
+}
+
+/// The z-score of the contrast across the estimate's contour against the same contour moved to
+/// the null placements inside the frame.
+pub fn edge_saliency(grey: &[f32], size: (usize, usize), e: &Ellipse) -> Option<f64> {
+    let (at_estimate, n) = contour_contrast(grey, size, e);
+    if n < CONTOUR_POINTS / 2 {
+        return None;
+    }
+    let radius = (e.a * e.b).sqrt();
     let mut nulls = Vec::with_capacity(SHIFTS);
     for k in 0..SHIFTS {
         let t = std::f64::consts::TAU * k as f64 / SHIFTS as f64;
-        let (dx, dy) = (
-            SHIFT_RADII * radius * t.cos(),
-            SHIFT_RADII * radius * t.sin(),
-        );
-        let mut moved = particle;
-        for x in [&mut moved.now, &mut moved.prev] {
-            x[sx] += dx;
-            x[sy] += dy;
-        }
-        let [cx, cy] = space.centre(&moved.now);
-        if (0.0..size.0 as f64).contains(&cx) && (0.0..size.1 as f64).contains(&cy) {
-            let l = observation.log_likelihood(&moved);
-            if l.is_finite() {
-                nulls.push(l);
-            }
+        let moved = Ellipse {
+            cx: e.cx + SHIFT_RADII * radius * t.cos(),
+            cy: e.cy + SHIFT_RADII * radius * t.sin(),
+            ..*e
+        };
+        let (v, m) = contour_contrast(grey, size, &moved);
+        if m == CONTOUR_POINTS {
+            nulls.push(v);
         }
     }
-    if nulls.len() < MIN_PLACEMENTS || !at_estimate.is_finite() {
+    if nulls.len() < MIN_PLACEMENTS {
         return None;
     }
     let n = nulls.len() as f64;
