@@ -566,10 +566,10 @@ impl MotionEstimator {
         let starts =
             restart::starting_motions(&vectors, est.origin, f64::from(1u32 << l), min_blocks);
         let origin = Some(est.origin);
-        let mut best = first;
+        let mut fits = vec![first];
         for m in starts {
             let p = start_params(spec, &m.a);
-            let Ok(next) = self.estimate_once(
+            if let Ok(next) = self.estimate_once(
                 pyramid0,
                 pyramid1,
                 region,
@@ -577,13 +577,33 @@ impl MotionEstimator {
                 origin,
                 Some(&p[..spec.len()]),
                 ws,
-            ) else {
-                continue;
-            };
-            if (next.0.reliable || next.2, next.1) > (best.0.reliable || best.2, best.1) {
-                best = next;
+            ) {
+                fits.push(next);
             }
         }
+        // The fits are compared by the pixels they explain within one threshold, c times the
+        // smallest noise scale among the fits that converged at a noise scale: a fit between two
+        // close motions has a larger scale of its own and, at it, would count pixels of both.
+        let usable = |f: &(MotionEstimate, f64, bool)| f.0.reliable || f.2;
+        let s_min = fits
+            .iter()
+            .filter(|f| usable(f))
+            .map(|f| f.0.scale)
+            .min_by(f64::total_cmp);
+        if let (Some(s_min), Some(l0), Some(l1)) = (s_min, pyramid0.level(0), pyramid1.level(0)) {
+            let t = self.settings.robust.c() * s_min;
+            for f in fits.iter_mut() {
+                f.1 = support_at(ws, l0, l1, region, bbox, &f.0, t);
+            }
+        }
+        // No usable fit: the first one, flagged.
+        let mut best = 0;
+        for (k, f) in fits.iter().enumerate() {
+            if usable(f) && (!usable(&fits[best]) || f.1 > fits[best].1) {
+                best = k;
+            }
+        }
+        let best = fits.swap_remove(best);
         // The fit explaining most pixels among the motions the blocks agree on is the dominant
         // one even below a majority (part of the region may be explained by no motion: pixels
         // that a moving block covers or uncovers).
@@ -823,6 +843,31 @@ impl MotionEstimator {
         let honest = converged && s <= 2.0 * st.max_scale;
         Ok((est, cov.support, honest))
     }
+}
+
+/// The weight of the region's pixels (level 0) whose DFD under `est` is within `t` grey levels
+/// and whose sample stays in the image.
+fn support_at(
+    ws: &mut Workspace,
+    l0: &Level,
+    l1: &Level,
+    region: &Region<'_>,
+    bbox: PixelBox,
+    est: &MotionEstimate,
+    t: f64,
+) -> f64 {
+    ws.collect(l0, 0, region, bbox);
+    let mut theta = [0.0; 7];
+    let n = est.params.len().min(7);
+    theta[..n].copy_from_slice(&est.params[..n]);
+    ws.evaluate(l0, l1, est.spec, &theta, est.origin, true);
+    ws.res
+        .iter()
+        .zip(&ws.valid)
+        .zip(&ws.m)
+        .filter(|((r, v), _)| **v != 0 && f64::from(r.abs()) < t)
+        .map(|(_, m)| f64::from(*m))
+        .sum()
 }
 
 /// The fewest blocks that make a starting motion of a re-start (see [`crate::restart`]).

@@ -23,8 +23,10 @@ const MAX_MATCH_PIXELS: usize = 24_576;
 /// A block is kept when its best sum of squared differences is below this share of the mean over
 /// the search window (a distinct minimum: not a flat block or a repetitive texture).
 const DISTINCT: f64 = 0.5;
-/// Blocks within this distance (in pixels of the matching level) of a motion agree with it.
-const AGREE: f64 = 0.75;
+/// Blocks within this distance (in pixels of the matching level) of a motion agree with it: about
+/// twice the matching error of a textured block, and small enough that a seed halfway between
+/// two motions 1.4 px apart (the grid's closest pair) gathers neither.
+const AGREE: f64 = 0.4;
 /// Starting motions returned at most.
 const MAX_STARTS: usize = 3;
 
@@ -212,9 +214,9 @@ fn block_ssd(f0: &Level, f1: &Level, p: (usize, usize), d: (i64, i64)) -> Option
 
 /// Up to [`MAX_STARTS`] affine motions (about `origin`, level-0 pixels) that the most blocks agree
 /// with, each with at least `min_blocks` blocks, best first. Found by consensus from every block's
-/// translation: the blocks within [`AGREE`] level pixels (`scale` = 2^level) of the motion are
-/// gathered, the affine motion refitted to them by least squares, and the gathering repeated
-/// three times; the motion with most blocks is kept, its blocks are removed, and the search is
+/// translation: the blocks within 2 × [`AGREE`] level pixels (`scale` = 2^level) of the motion
+/// are gathered, the affine motion refitted to them by least squares, and the gathering repeated
+/// three times within [`AGREE`]; the motion with most blocks is kept, its blocks are removed, and the search is
 /// repeated for the next.
 pub(crate) fn starting_motions(
     vectors: &[BlockVector],
@@ -236,8 +238,11 @@ pub(crate) fn starting_motions(
         let mut best: Option<(usize, Affine)> = None;
         for seed in &pool {
             let mut m = Affine::translation(seed.d);
-            for _ in 0..3 {
-                agreeing(&pool, &m, tol, &mut members);
+            for it in 0..4 {
+                // The first gathering is twice as wide: a seed's neighbours on a motion with a
+                // linear part differ from its translation by a few tenths of a pixel.
+                let t = if it == 0 { 2.0 * tol } else { tol };
+                agreeing(&pool, &m, t, &mut members);
                 match fit(&pool, &members) {
                     Some(f) => m = f,
                     None => break,
