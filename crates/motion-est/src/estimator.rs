@@ -215,7 +215,9 @@ pub struct MotionEstimate {
     /// [`Settings::min_inlier_fraction`] (default: a majority) of the region's pixels that stay
     /// in the image, and that noise scale is at most twice [`Settings::max_scale`] (a larger one
     /// means that no group of pixels fits at the noise level: the fit sits between motions, and
-    /// its inlier fraction is then high only because the scale measures the misfit). `false` when the dominant motion could not be separated from the rest (a
+    /// its inlier fraction is then high only because the scale measures the misfit). After a
+    /// re-start (see [`crate::restart`]) the fit explaining most pixels is also reliable from
+    /// [`Settings::min_plurality_fraction`] of them. `false` when the dominant motion could not be separated from the rest (a
     /// compromise between motions, or a motion of a minority): treat the estimate as failed; its
     /// parameters and covariance do not describe the region's motion.
     #[serde(default)]
