@@ -216,7 +216,7 @@ pub struct MotionEstimate {
     /// in the image, and that noise scale is at most twice [`Settings::max_scale`] (a larger one
     /// means that no group of pixels fits at the noise level: the fit sits between motions, and
     /// its inlier fraction is then high only because the scale measures the misfit). After a
-    /// re-start (see [`crate::restart`]) the fit explaining most pixels is also reliable from
+    /// re-start from the motions that blocks of the region agree on, the fit explaining most pixels is also reliable from
     /// [`Settings::min_plurality_fraction`] of them. `false` when the dominant motion could not be separated from the rest (a
     /// compromise between motions, or a motion of a minority): treat the estimate as failed; its
     /// parameters and covariance do not describe the region's motion.
