@@ -34,7 +34,7 @@ use crate::pyramid::{Level, Pyramid, Window};
 use crate::region::{PixelBox, Region};
 use crate::robust::{RobustFunction, lower_quartile, robust_scale_from};
 use crate::simd::simd;
-use crate::{Error, Result};
+use crate::{Error, Result, restart};
 
 pub(crate) type Mat7 = SMatrix<f64, 7, 7>;
 type Vec7 = SVector<f64, 7>;
@@ -76,6 +76,14 @@ pub struct Settings {
     /// that stay in the image, at the noise scale.
     #[serde(default = "default_min_inlier_fraction")]
     pub min_inlier_fraction: f64,
+    /// The least inlier fraction of a re-started estimate that is reliable as the largest group
+    /// (default 0.4): when the first fit is not reliable, the estimator re-starts from the
+    /// motions that blocks of the region agree on and keeps the fit explaining most pixels; that
+    /// fit is reliable below [`min_inlier_fraction`](Self::min_inlier_fraction) when it explains
+    /// at least this share (a block moving by a few pixels covers and uncovers pixels that no
+    /// motion explains, so the background of a 47 % block explains only 40–50 %).
+    #[serde(default = "default_min_plurality_fraction")]
+    pub min_plurality_fraction: f64,
     /// Ceiling on the scale of the IRLS weights at the two finest levels, grey levels (default
     /// 8 / 4.6851 ≈ 1.71: with Tukey's c, pixels whose DFD exceeds 8 grey levels get no weight, the
     /// fixed constant of Motion2D). Without it the scale measured at a compromise between two
@@ -98,6 +106,10 @@ fn default_min_inlier_fraction() -> f64 {
     0.5
 }
 
+fn default_min_plurality_fraction() -> f64 {
+    0.4
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Self {
@@ -112,6 +124,7 @@ impl Default for Settings {
             min_scale: 0.1,
             warm_levels: default_warm_levels(),
             min_inlier_fraction: default_min_inlier_fraction(),
+            min_plurality_fraction: default_min_plurality_fraction(),
             max_scale: default_max_scale(),
         }
     }
@@ -162,11 +175,13 @@ impl Settings {
                 return bad(name, format!("{v} must be finite and positive"));
             }
         }
-        if !(self.min_inlier_fraction >= 0.0 && self.min_inlier_fraction <= 1.0) {
-            return bad(
-                "min_inlier_fraction",
-                format!("{} must be in [0, 1]", self.min_inlier_fraction),
-            );
+        for (name, v) in [
+            ("min_inlier_fraction", self.min_inlier_fraction),
+            ("min_plurality_fraction", self.min_plurality_fraction),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return bad(name, format!("{v} must be in [0, 1]"));
+            }
         }
         self.robust.validate()
     }
@@ -200,7 +215,9 @@ pub struct MotionEstimate {
     /// [`Settings::min_inlier_fraction`] (default: a majority) of the region's pixels that stay
     /// in the image, and that noise scale is at most twice [`Settings::max_scale`] (a larger one
     /// means that no group of pixels fits at the noise level: the fit sits between motions, and
-    /// its inlier fraction is then high only because the scale measures the misfit). `false` when the dominant motion could not be separated from the rest (a
+    /// its inlier fraction is then high only because the scale measures the misfit). After a
+    /// re-start from the motions that blocks of the region agree on, the fit explaining most pixels is also reliable from
+    /// [`Settings::min_plurality_fraction`] of them. `false` when the dominant motion could not be separated from the rest (a
     /// compromise between motions, or a motion of a minority): treat the estimate as failed; its
     /// parameters and covariance do not describe the region's motion.
     #[serde(default)]
@@ -503,7 +520,10 @@ impl MotionEstimator {
         })
     }
 
-    /// [`estimate_from`](Self::estimate_from) on the calling thread.
+    /// [`estimate_from`](Self::estimate_from) on the calling thread: one coarse-to-fine fit, and
+    /// when it is not [`reliable`](MotionEstimate::reliable), re-starts from the motions that
+    /// blocks of the region agree on (see [`crate::restart`]); the reliable fit explaining most
+    /// pixels is kept, and the first fit, flagged, when none is.
     #[allow(clippy::too_many_arguments)]
     fn estimate_from_here(
         &self,
@@ -515,6 +535,100 @@ impl MotionEstimator {
         initial: Option<&[f64]>,
         ws: &mut Workspace,
     ) -> Result<MotionEstimate> {
+        let first = self.estimate_once(pyramid0, pyramid1, region, spec, origin, initial, ws)?;
+        if first.0.reliable {
+            return Ok(first.0);
+        }
+        let (w, h) = pyramid0.image_size();
+        let Some(bbox) = region.pixel_box(w, h) else {
+            return Ok(first.0);
+        };
+        let top = self
+            .settings
+            .levels
+            .min(pyramid0.levels())
+            .min(pyramid1.levels());
+        let l = restart::matching_level(bbox, top);
+        let (Some(f0), Some(f1)) = (pyramid0.level(l), pyramid1.level(l)) else {
+            return Ok(first.0);
+        };
+        let mut vectors = Vec::new();
+        let est = &first.0;
+        // Around the failed fit (between the motions present, or on one of them) and around the
+        // caller's guess (zero without one): the failed fit may have wandered off both.
+        let fitted = |x: f64, y: f64| est.displacement(x, y);
+        let prior = |x: f64, y: f64| match initial {
+            Some(p) => spec
+                .model
+                .displacement(p, x - est.origin[0], y - est.origin[1]),
+            None => [0.0, 0.0],
+        };
+        restart::block_vectors(f0, f1, l, region, bbox, &[&fitted, &prior], &mut vectors);
+        let min_blocks = (vectors.len() / 10).max(MIN_START_BLOCKS);
+        let starts =
+            restart::starting_motions(&vectors, est.origin, f64::from(1u32 << l), min_blocks);
+        let origin = Some(est.origin);
+        let mut fits = vec![first];
+        for m in starts {
+            let p = start_params(spec, &m.a);
+            if let Ok(next) = self.estimate_once(
+                pyramid0,
+                pyramid1,
+                region,
+                spec,
+                origin,
+                Some(&p[..spec.len()]),
+                ws,
+            ) {
+                fits.push(next);
+            }
+        }
+        // The fits are compared by the pixels they explain within one threshold, c times the
+        // smallest noise scale among the fits that converged at a noise scale: a fit between two
+        // close motions has a larger scale of its own and, at it, would count pixels of both.
+        let usable = |f: &(MotionEstimate, f64, bool)| f.0.reliable || f.2;
+        let s_min = fits
+            .iter()
+            .filter(|f| usable(f))
+            .map(|f| f.0.scale)
+            .min_by(f64::total_cmp);
+        if let (Some(s_min), Some(l0), Some(l1)) = (s_min, pyramid0.level(0), pyramid1.level(0)) {
+            let t = self.settings.robust.c() * s_min;
+            for f in fits.iter_mut() {
+                f.1 = support_at(ws, l0, l1, region, bbox, &f.0, t);
+            }
+        }
+        // No usable fit: the first one, flagged.
+        let mut best = 0;
+        for (k, f) in fits.iter().enumerate() {
+            if usable(f) && (!usable(&fits[best]) || f.1 > fits[best].1) {
+                best = k;
+            }
+        }
+        let best = fits.swap_remove(best);
+        // The fit explaining most pixels among the motions the blocks agree on is the dominant
+        // one even below a majority (part of the region may be explained by no motion: pixels
+        // that a moving block covers or uncovers).
+        let (mut est, _, plural) = best;
+        if plural && est.inlier_fraction >= self.settings.min_plurality_fraction {
+            est.reliable = true;
+        }
+        Ok(est)
+    }
+
+    /// One coarse-to-fine fit; also returns the weight of the pixels it explains at the noise
+    /// scale (the numerator of [`MotionEstimate::inlier_fraction`]).
+    #[allow(clippy::too_many_arguments)]
+    fn estimate_once(
+        &self,
+        pyramid0: &Pyramid,
+        pyramid1: &Pyramid,
+        region: &Region<'_>,
+        spec: ModelSpec,
+        origin: Option<[f64; 2]>,
+        initial: Option<&[f64]>,
+        ws: &mut Workspace,
+    ) -> Result<(MotionEstimate, f64, bool)> {
         let st = &self.settings;
         if let Some(p) = initial {
             if p.len() != spec.len() {
@@ -714,7 +828,7 @@ impl MotionEstimator {
                 covariance.push(cov.matrix[(i, j)]);
             }
         }
-        Ok(MotionEstimate {
+        let est = MotionEstimate {
             spec,
             params: theta[..n].to_vec(),
             covariance,
@@ -727,8 +841,50 @@ impl MotionEstimator {
             reliable: converged
                 && cov.inlier_fraction >= st.min_inlier_fraction
                 && s <= 2.0 * st.max_scale,
-        })
+        };
+        let honest = converged && s <= 2.0 * st.max_scale;
+        Ok((est, cov.support, honest))
     }
+}
+
+/// The weight of the region's pixels (level 0) whose DFD under `est` is within `t` grey levels
+/// and whose sample stays in the image.
+fn support_at(
+    ws: &mut Workspace,
+    l0: &Level,
+    l1: &Level,
+    region: &Region<'_>,
+    bbox: PixelBox,
+    est: &MotionEstimate,
+    t: f64,
+) -> f64 {
+    ws.collect(l0, 0, region, bbox);
+    let mut theta = [0.0; 7];
+    let n = est.params.len().min(7);
+    theta[..n].copy_from_slice(&est.params[..n]);
+    ws.evaluate(l0, l1, est.spec, &theta, est.origin, true);
+    ws.res
+        .iter()
+        .zip(&ws.valid)
+        .zip(&ws.m)
+        .filter(|((r, v), _)| **v != 0 && f64::from(r.abs()) < t)
+        .map(|(_, m)| f64::from(*m))
+        .sum()
+}
+
+/// The fewest blocks that make a starting motion of a re-start (see [`crate::restart`]).
+const MIN_START_BLOCKS: usize = 4;
+
+/// The parameters of `spec` (offset 0) closest to the affine motion `a` (the layout of
+/// [`MotionModel::Affine`]): its translation, and for the scale model the mean of the diagonal.
+fn start_params(spec: ModelSpec, a: &[f64; 6]) -> [f64; 7] {
+    let mut p = [0.0; 7];
+    match spec.model {
+        MotionModel::Translation => (p[0], p[1]) = (a[0], a[3]),
+        MotionModel::Scale => (p[0], p[1], p[2]) = (a[0], a[3], 0.5 * (a[1] + a[5])),
+        MotionModel::Affine => p[..6].copy_from_slice(a),
+    }
+    p
 }
 
 /// What the iterations at one level need.
@@ -786,6 +942,8 @@ impl MotionEstimator {
         for &active in phases {
             run.converged = false;
             let mut prev_step = f64::INFINITY;
+            // The smallest step so far and the iterations since it (coarse levels' stall test).
+            let (mut least, mut since) = (f64::INFINITY, 0usize);
             for _ in 0..st.max_iterations {
                 run.iterations += 1;
                 let n_valid = ws.evaluate(lv.l0, lv.l1, spec, theta, lv.o, lv.full_res);
@@ -836,6 +994,18 @@ impl MotionEstimator {
                     break;
                 }
                 prev_step = step;
+                // A coarse level whose steps stopped shrinking has reached the precision its
+                // pixels allow (pixels crossing the window's border and Tukey's threshold move
+                // the fit back and forth by about the step): further iterations cycle up to the
+                // cap (issue 16), and the next level only needs a start within its basin.
+                if step < least {
+                    (least, since) = (step, 0);
+                } else {
+                    since += 1;
+                    if !lv.full_res && since >= STALL_ITERATIONS && least < STALL_STEP {
+                        break;
+                    }
+                }
             }
         }
         run
@@ -923,6 +1093,14 @@ impl MotionEstimator {
 /// `MotionEstimator::best_start`).
 const START_RADIUS: usize = 2;
 
+/// Iterations without a step smaller than the smallest so far after which a coarse level stops
+/// (see `iterate_level`).
+const STALL_ITERATIONS: usize = 3;
+
+/// The stall test only applies once a step smaller than this (level pixels) was taken: the fit is
+/// then within the next level's basin.
+const STALL_STEP: f64 = 0.25;
+
 /// Iterations after which the scale of a coarse level is kept (see `iterate_level`).
 const FREEZE_SCALE: usize = 3;
 
@@ -933,6 +1111,8 @@ struct CovarianceOut {
     matrix: Mat7,
     noise_sigma: f64,
     inlier_fraction: f64,
+    /// The weight of the inliers (numerator of the fraction).
+    support: f64,
 }
 
 /// Per-row candidate ranges and a trig-free weight test for [`Workspace::collect`]. The weight is
@@ -1777,6 +1957,7 @@ impl Workspace {
             matrix: cov,
             noise_sigma: noise_var.sqrt(),
             inlier_fraction,
+            support: m_in,
         })
     }
 

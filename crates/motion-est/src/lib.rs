@@ -50,6 +50,7 @@ pub mod odobez;
 pub mod patch;
 pub mod pyramid;
 pub mod region;
+mod restart;
 pub mod robust;
 mod simd;
 
