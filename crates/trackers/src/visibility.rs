@@ -30,10 +30,10 @@ use crate::region::status::LostChain;
 pub const SHIFTS: usize = 16;
 /// Distance of the null placements, in radii of the contour.
 pub const SHIFT_RADII: f64 = 1.5;
-/// z of an unseen target (a filter's local maximum on a featureless likelihood) and of a seen
+/// z of an unseen target (a filter's local maximum on a featureless image) and of a seen
 /// one; the chain reads q = (z − Z_UNSEEN) / (Z_SEEN − Z_UNSEEN), about 0 and 1.
-const Z_UNSEEN: f64 = 0.5;
-const Z_SEEN: f64 = 3.5;
+const Z_UNSEEN: f64 = 0.0;
+const Z_SEEN: f64 = 2.5;
 /// Bounds of q: one frame cannot outvote the chain's memory.
 const Q_RANGE: (f64, f64) = (-1.0, 2.0);
 /// Fewest null placements inside the frame for a z-score.
