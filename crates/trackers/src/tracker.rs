@@ -598,21 +598,11 @@ impl Tracker for ParticleTracker {
                 return Err(e.into());
             }
         };
-        let visibility = match &mut self.visibility {
-            Some(v) => {
-                let best = set
-                    .weights()
-                    .iter()
-                    .enumerate()
-                    .max_by(|a, b| a.1.total_cmp(b.1))
-                    .map(|(i, _)| i)
-                    .unwrap_or(0);
-                let pose = self.config.space.pose(&set.states()[best].now);
-                pose.to_ellipse()
-                    .map(|e| v.observe(frame.data(), self.size, &e))
-            }
-            None => None,
-        };
+        let visibility = self.visibility.as_mut().and_then(|v| {
+            let (_, best, _) = smc_core::estimate::max_weight_particle(&set);
+            let contour = self.config.space.pose(&best.now).to_ellipse()?;
+            Some(v.observe(frame.data(), self.size, &contour))
+        });
         let estimated = self.estimate(&set);
         self.set = Some(set);
         let PosteriorSummary {

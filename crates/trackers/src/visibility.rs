@@ -127,7 +127,7 @@ pub fn edge_saliency(grey: &[f32], size: (usize, usize), e: &Ellipse) -> Option<
         return None;
     }
     let radius = (e.a * e.b).sqrt();
-    let mut nulls = Vec::with_capacity(SHIFTS);
+    let (mut placements, mut count) = ([0.0; SHIFTS], 0);
     for k in 0..SHIFTS {
         let t = std::f64::consts::TAU * k as f64 / SHIFTS as f64;
         let moved = Ellipse {
@@ -137,9 +137,11 @@ pub fn edge_saliency(grey: &[f32], size: (usize, usize), e: &Ellipse) -> Option<
         };
         let (v, m) = contour_contrast(grey, size, &moved);
         if m == CONTOUR_POINTS {
-            nulls.push(v);
+            placements[count] = v;
+            count += 1;
         }
     }
+    let nulls = &placements[..count];
     if nulls.len() < MIN_PLACEMENTS {
         return None;
     }

@@ -5,8 +5,8 @@ use rayon::prelude::*;
 
 use super::alias::AliasTable;
 use super::marginal::frame_out_of_range;
-use super::{BackwardMethod, SmootherSettings, check_log_density};
-use crate::error::{Degeneracy, Error, Result};
+use super::{BackwardMethod, SmootherSettings, backward_weights, check_log_density};
+use crate::error::{Error, Result};
 use crate::history::History;
 use crate::model::TransitionDensity;
 use crate::particles::ParticleSet;
@@ -293,24 +293,16 @@ impl<S, T: TransitionDensity<State = S> + ?Sized> BackwardStep<'_, S, T> {
         }
         // The exact draw from (S1): one pass for the log-weights, one for the inverse CDF.
         scratch.clear();
-        let mut max = f64::NEG_INFINITY;
-        for (i, (x, lw)) in self.previous.iter().zip(self.log_w).enumerate() {
-            let v = lw + check_log_density(self.transition.log_density(t + 1, x, x_next), t, j, i)?;
-            scratch.push(v);
-            max = max.max(v);
-        }
-        if max == f64::NEG_INFINITY {
-            return Err(Error::DegenerateBackward {
-                frame: t,
-                particle: j,
-                reason: Degeneracy::AllZero,
-            });
-        }
-        let mut sum = 0.0;
-        for v in scratch.iter_mut() {
-            *v = (*v - max).exp();
-            sum += *v;
-        }
+        scratch.resize(self.previous.len(), 0.0);
+        let sum = backward_weights(
+            self.transition,
+            self.previous,
+            self.log_w,
+            t,
+            j,
+            x_next,
+            scratch,
+        )?;
         let target = rng.random::<f64>() * sum;
         let mut acc = 0.0;
         let mut pick = None;
@@ -323,7 +315,7 @@ impl<S, T: TransitionDensity<State = S> + ?Sized> BackwardStep<'_, S, T> {
                 }
             }
         }
-        // `max` is finite, so some entry is positive and `pick` is set.
+        // `backward_weights` succeeded, so some entry is positive and `pick` is set.
         let i = pick.unwrap_or(0);
         Ok((
             i,

@@ -4,7 +4,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, ColMut, ColRef, MatRef, Par};
 use rayon::prelude::*;
 
-use super::{SmootherSettings, check_log_density};
+use super::{SmootherSettings, backward_weights};
 use crate::error::{Degeneracy, Error, Result};
 use crate::history::History;
 use crate::model::TransitionDensity;
@@ -216,31 +216,7 @@ impl MarginalSmoother {
                     column.fill(0.0);
                     return Ok(f64::INFINITY);
                 }
-                let x_next = &following[j];
-                let mut max = f64::NEG_INFINITY;
-                for (i, (entry, (x, lw))) in column
-                    .iter_mut()
-                    .zip(previous.iter().zip(log_w))
-                    .enumerate()
-                {
-                    let v =
-                        lw + check_log_density(transition.log_density(t + 1, x, x_next), t, j, i)?;
-                    *entry = v;
-                    max = max.max(v);
-                }
-                if max == f64::NEG_INFINITY {
-                    return Err(Error::DegenerateBackward {
-                        frame: t,
-                        particle: j,
-                        reason: Degeneracy::AllZero,
-                    });
-                }
-                let mut sum = 0.0;
-                for entry in column.iter_mut() {
-                    *entry = (*entry - max).exp();
-                    sum += *entry;
-                }
-                Ok(sum)
+                backward_weights(transition, previous, log_w, t, j, &following[j], column)
             };
             if parallel {
                 block

@@ -100,7 +100,6 @@ pub use marginal::{MarginalSmoother, SmoothedMarginals, fixed_lag_weights, smoot
 use crate::error::{Error, Result};
 #[cfg(doc)]
 use crate::history::History;
-#[cfg(doc)]
 use crate::model::TransitionDensity;
 
 /// How backward simulation draws from the backward kernel (S1).
@@ -178,6 +177,46 @@ impl SmootherSettings {
         }
         Ok(())
     }
+}
+
+/// The unnormalised backward weights of the particles `previous` (log-weights `log_w`) of frame
+/// `t` towards `x_next`, particle `j` of frame `t + 1` (Eq. (S1)): `out[i]` ∝ w_t^i ·
+/// p(x_next | x_t^i), rescaled by their largest value so that the exponentials cannot
+/// overflow. Returns their sum.
+///
+/// # Errors
+/// A NaN or +∞ density ([`check_log_density`]), or every weight zero.
+pub(crate) fn backward_weights<S, T>(
+    transition: &T,
+    previous: &[S],
+    log_w: &[f64],
+    t: usize,
+    j: usize,
+    x_next: &S,
+    out: &mut [f64],
+) -> Result<f64>
+where
+    T: TransitionDensity<State = S> + ?Sized,
+{
+    let mut max = f64::NEG_INFINITY;
+    for (i, (entry, (x, lw))) in out.iter_mut().zip(previous.iter().zip(log_w)).enumerate() {
+        let v = lw + check_log_density(transition.log_density(t + 1, x, x_next), t, j, i)?;
+        *entry = v;
+        max = max.max(v);
+    }
+    if max == f64::NEG_INFINITY {
+        return Err(Error::DegenerateBackward {
+            frame: t,
+            particle: j,
+            reason: crate::error::Degeneracy::AllZero,
+        });
+    }
+    let mut sum = 0.0;
+    for entry in out.iter_mut() {
+        *entry = (*entry - max).exp();
+        sum += *entry;
+    }
+    Ok(sum)
 }
 
 /// Checks one transition log-density: NaN and +∞ are errors.

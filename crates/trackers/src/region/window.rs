@@ -10,7 +10,7 @@ use super::colour::ColourBins;
 use crate::Result;
 use crate::frame::Frame;
 
-/// Strips of the staircase that approximates an ellipse in [`WorkingWindow::ellipse_sum`].
+/// Strips of the staircase that approximates an ellipse in [`WorkingWindow::ellipse_sums`].
 const STRIPS: usize = 10;
 /// Points on the contour read by [`WorkingWindow::edge_strength`].
 const CONTOUR_POINTS: usize = 32;
@@ -188,21 +188,23 @@ impl WorkingWindow {
         at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0)
     }
 
-    /// The sum of `integral`'s values (the log-ratios or their positive parts) over the
-    /// ellipse, in working pixels, approximated by a
-    /// staircase of horizontal strips (exact for the strips, each as wide as the ellipse at its
-    /// middle row), and the ellipse's area in working pixels.
-    fn ellipse_sum(&self, integral: &[f64], e: &Ellipse) -> (f64, f64) {
+    /// The sums of each of `integrals`' values (the log-ratios, their positive parts) over the
+    /// ellipse, in working pixels, approximated by one staircase of horizontal strips (exact for
+    /// the strips, each as wide as the ellipse at its middle row), and the ellipse's area in
+    /// working pixels.
+    fn ellipse_sums<const K: usize>(&self, integrals: [&[f64]; K], e: &Ellipse) -> ([f64; K], f64) {
         let (cx, cy, a, b) = self.to_working(e);
         let dy = 2.0 * b / STRIPS as f64;
-        let mut sum = 0.0;
+        let mut sums = [0.0; K];
         for k in 0..STRIPS {
             let y0 = cy - b + k as f64 * dy;
             let mid = (y0 + 0.5 * dy - cy) / b;
             let half = a * (1.0 - mid * mid).max(0.0).sqrt();
-            sum += self.box_sum(integral, cx - half, y0, cx + half, y0 + dy);
+            for (sum, integral) in sums.iter_mut().zip(integrals) {
+                *sum += self.box_sum(integral, cx - half, y0, cx + half, y0 + dy);
+            }
         }
-        (sum, std::f64::consts::PI * a * b)
+        (sums, std::f64::consts::PI * a * b)
     }
 
     /// The colour contrast of the ellipse `e`, in nats per pixel of the reference area:
@@ -218,14 +220,14 @@ impl WorkingWindow {
     ///   an even more background-like wall earns nothing (the mean of the signed log-ratios
     ///   there made every estimate grow over hair and neck).
     pub fn contrast(&self, e: &Ellipse, ring: f64, reference: f64) -> f64 {
-        let (inner, area) = self.ellipse_sum(&self.integral, e);
-        let (inner_positive, _) = self.ellipse_sum(&self.integral_positive, e);
+        let ([inner, inner_positive], area) =
+            self.ellipse_sums([&self.integral, &self.integral_positive], e);
         let outer = Ellipse {
             a: e.a * ring,
             b: e.b * ring,
             ..*e
         };
-        let (outer_positive, outer_area) = self.ellipse_sum(&self.integral_positive, &outer);
+        let ([outer_positive], outer_area) = self.ellipse_sums([&self.integral_positive], &outer);
         let ring_area = outer_area - area;
         if reference < 1e-9 || ring_area < 1e-9 {
             return 0.0;
