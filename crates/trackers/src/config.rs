@@ -154,6 +154,12 @@ pub struct TrackerConfig {
     /// sits on γ ≈ 1 hypotheses that Eq. 12 rates above the reappearing target.
     #[serde(default)]
     pub reacquisition: Option<ReacquisitionSettings>,
+    /// The mean radius, in pixels, that the target is shrunk to before tracking (see
+    /// [`crate::working_scale`]); a target no larger is tracked at full resolution. `None` (the
+    /// default, and every preset's): always full resolution, as the papers. Measured on the real
+    /// development set, it helped some presets and hurt others (docs/RESULTS.md, decision log).
+    #[serde(default)]
+    pub working_radius: Option<f64>,
     /// The region tracker's settings ([`crate::region`]); `None` for the papers' contour
     /// trackers. When present, [`crate::build`] makes a region tracker, which reads `name`,
     /// `particles`, `seed` and these settings only.
@@ -200,6 +206,14 @@ impl TrackerConfig {
             return Err(Error::InvalidSetting {
                 name: "init_spread",
                 reason: format!("{} must be finite and non-negative", self.init_spread),
+            });
+        }
+        if let Some(r) = self.working_radius
+            && !(r.is_finite() && r >= 4.0)
+        {
+            return Err(Error::InvalidSetting {
+                name: "working_radius",
+                reason: format!("{r} must be at least 4 px (or absent: full resolution)"),
             });
         }
         self.dynamics.validate()?;
@@ -444,6 +458,7 @@ impl Preset {
             resampling: ResamplingScheme::Systematic,
             estimator: PoseEstimator::Mean,
             init_spread: default_init_spread(),
+            working_radius: None,
             reacquisition: None,
             region: None,
         };

@@ -65,6 +65,7 @@ pub mod region;
 pub mod space;
 pub mod tracker;
 pub mod visibility;
+pub mod working_scale;
 
 pub use config::{
     ClutterMode, MotionSettings, OcclusionMode, PoseEstimator, Preset, ProposalKind, TrackerConfig,
@@ -77,6 +78,7 @@ pub use particle::Particle;
 pub use region::{RegionSettings, RegionTracker};
 pub use space::ShapeSpace;
 pub use tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, build};
+pub use working_scale::{ScaledTracker, WorkingScale};
 
 /// Builds a preset by name with `particles` particles and `seed`.
 ///

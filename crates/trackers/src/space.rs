@@ -56,6 +56,27 @@ impl ShapeSpace {
         }
     }
 
+    /// The state of the contour mapped by p ↦ `factor`·p + (`offset`, `offset`) (a change of
+    /// pixel grid, see [`crate::working_scale`]).
+    pub fn map_pose(self, x: &StateVector, factor: f64, offset: f64) -> StateVector {
+        let mut y = *x;
+        match self {
+            ShapeSpace::Odobez => {
+                y[0] = factor * x[0] + offset;
+                y[1] = factor * x[1] + offset;
+                y[2] = factor * x[2];
+            }
+            ShapeSpace::Affine => {
+                for v in &mut y[..4] {
+                    *v *= factor;
+                }
+                y[4] = factor * x[4] + offset;
+                y[5] = factor * x[5] + offset;
+            }
+        }
+        y
+    }
+
     /// Whether slot `j` is a translation component.
     pub fn is_translation(self, j: usize) -> bool {
         match self {

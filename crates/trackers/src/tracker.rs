@@ -119,7 +119,7 @@ pub fn build(config: TrackerConfig) -> Result<Box<dyn Tracker>> {
     if config.region.is_some() {
         return Ok(Box::new(crate::region::RegionTracker::new(config)?));
     }
-    Ok(Box::new(ParticleTracker::new(config)?))
+    Ok(Box::new(crate::working_scale::ScaledTracker::new(config)?))
 }
 
 /// The particle-filter tracker behind every preset.
