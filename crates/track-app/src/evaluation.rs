@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 use scene_synth::{FrameTruth, Scenario, ScenarioParams, Scene};
-use trackers::{Preset, TrackerConfig};
+use trackers::{Preset, SmootherSettings, TrackerConfig};
 
 use crate::groundtruth::{Box2, Ellipse};
 use crate::metrics::first_failure;
@@ -101,6 +101,28 @@ impl SyntheticSequence {
             session.push(f, &init, self.truth_box(k))?;
         }
         Ok(session.finish())
+    }
+
+    /// Tracks the whole sequence with `config` recording its particles, and smooths the run:
+    /// the filtered records and the smoothed ones.
+    ///
+    /// # Errors
+    /// An invalid configuration, a tracker failure or a smoother failure.
+    pub fn track_and_smooth(
+        &self,
+        mut config: TrackerConfig,
+        smoother: &SmootherSettings,
+    ) -> Result<(SessionOutput, Vec<FrameRecord>)> {
+        config.filter.history = Some(Default::default());
+        let init = self.initial_ellipse()?;
+        let tracker =
+            trackers::build(config).map_err(|e| AppError::setting("tracker", e.to_string()))?;
+        let mut session = Session::new(tracker, None);
+        for (k, f) in self.frames.iter().enumerate() {
+            session.push(f, &init, self.truth_box(k))?;
+        }
+        let smoothed = session.smoothed(smoother)?;
+        Ok((session.finish(), smoothed))
     }
 
     /// IoU of each record's box with the true box.
@@ -356,25 +378,55 @@ fn truth_status(t: &FrameTruth) -> TrackerStatus {
     }
 }
 
-/// The switching scores as a Markdown table.
+/// The switching scores as a Markdown table: one row per scene and tracker, in order of first
+/// appearance; where several runs (seeds) share a row, each cell is their mean and, in
+/// brackets, their range.
 pub fn switching_markdown(rows: &[SwitchingScores]) -> String {
-    let cell = |v: Option<f64>, pct: bool| match v {
-        Some(v) if pct => format!("{:.1} %", 100.0 * v),
-        Some(v) => format!("{v:.3}"),
-        None => "—".to_owned(),
+    let mut groups: Vec<(&str, &str, Vec<&SwitchingScores>)> = Vec::new();
+    for r in rows {
+        match groups
+            .iter_mut()
+            .find(|(scene, tracker, _)| *scene == r.scene && *tracker == r.tracker)
+        {
+            Some((_, _, g)) => g.push(r),
+            None => groups.push((&r.scene, &r.tracker, vec![r])),
+        }
+    }
+    let cell = |values: Vec<f64>, pct: bool| -> String {
+        if values.is_empty() {
+            return "—".to_owned();
+        }
+        let k = if pct { 100.0 } else { 1.0 };
+        let fmt = |v: f64| {
+            if pct {
+                format!("{:.1} %", k * v)
+            } else {
+                format!("{v:.3}")
+            }
+        };
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        if values.len() == 1 {
+            return fmt(mean);
+        }
+        let (lo, hi) = values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        format!("{} ({}–{})", fmt(mean), fmt(lo), fmt(hi))
     };
     let mut s = String::from(
-        "| Scene | Tracker | β̂ accuracy | γ̂ MAE | α̂ accuracy | mean IoU |\n|---|---|---|---|---|---|\n",
+        "| Scene | Tracker | runs | β̂ accuracy | γ̂ MAE | α̂ accuracy | mean IoU |\n|---|---|---|---|---|---|---|\n",
     );
-    for r in rows {
+    for (scene, tracker, g) in groups {
+        let pick = |f: fn(&SwitchingScores) -> Option<f64>| g.iter().filter_map(|r| f(r)).collect();
         s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {:.3} |\n",
-            r.scene,
-            r.tracker,
-            cell(r.beta_accuracy, true),
-            cell(r.gamma_mae, false),
-            cell(r.alpha_accuracy, true),
-            r.mean_iou
+            "| {scene} | {tracker} | {} | {} | {} | {} | {} |\n",
+            g.len(),
+            cell(pick(|r| r.beta_accuracy), true),
+            cell(pick(|r| r.gamma_mae), false),
+            cell(pick(|r| r.alpha_accuracy), true),
+            cell(pick(|r| Some(r.mean_iou)), false),
         ));
     }
     s

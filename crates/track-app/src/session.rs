@@ -6,7 +6,7 @@
 
 use contour_obs::Ellipse as ContourEllipse;
 use image::RgbImage;
-use trackers::{Estimate, Tracker};
+use trackers::{Estimate, SmootherSettings, Tracker};
 
 use crate::groundtruth::{Box2, Ellipse};
 use crate::record::{FrameRecord, TrackerStatus};
@@ -193,6 +193,35 @@ impl Session {
     /// overlays as it goes instead of keeping them all.
     pub fn take_overlay(&mut self) -> Option<RgbImage> {
         self.overlays.pop()
+    }
+
+    /// The smoothed record of every frame so far (see `trackers::smoothing`): the first
+    /// frame's record as filtered (the initialisation), then the tracker's smoothed estimates.
+    ///
+    /// # Errors
+    /// [`AppError::Computation`] when the tracker cannot be smoothed (its configuration records
+    /// no particles) or the smoother fails.
+    pub fn smoothed(&mut self, settings: &SmootherSettings) -> Result<Vec<FrameRecord>> {
+        let estimates = self
+            .tracker
+            .smoothed(settings)
+            .map_err(|e| AppError::computation("smoothing", e))?;
+        let mut records: Vec<FrameRecord> = self.records.first().cloned().into_iter().collect();
+        for e in &estimates {
+            let Some(filtered) = self.records.get(e.frame) else {
+                return Err(AppError::computation(
+                    "smoothing",
+                    format!(
+                        "a smoothed estimate of frame {} that was never tracked",
+                        e.frame
+                    ),
+                ));
+            };
+            let mut r = record_of(filtered.frame, e);
+            r.millis = filtered.millis;
+            records.push(r);
+        }
+        Ok(records)
     }
 
     /// Ends the session.

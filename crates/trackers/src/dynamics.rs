@@ -412,6 +412,55 @@ impl TrackerDynamics {
         }
     }
 
+    /// ln p(next | previous) of a whole particle under the prior, whatever proposal drew it: the
+    /// kinematic density ([`TrackerDynamics::log_kinematic_density`]) plus the hidden variables'
+    /// transitions ([`TrackerDynamics::log_hidden_density`]). This is the transition density of
+    /// the smoothers (see [`crate::smoothing`]); the reacquisition jump is not part of it.
+    pub fn log_transition(&self, previous: &Particle, next: &Particle) -> f64 {
+        self.log_kinematic_density(previous, next) + self.log_hidden_density(previous, next)
+    }
+
+    /// ln p of the hidden variables of `next` given `previous`: the {β, λ} HMM (Wu Fig. 5), the
+    /// γ random walk (Wu Eq. 13) or the status HMM {α, γ} (Wu §6.3; γ | α uniform on its range,
+    /// or the truncated exponential of [`DynamicsSettings::locked_gamma_rate`] when locked).
+    /// Variables a tracker does not model contribute 0.
+    pub fn log_hidden_density(&self, previous: &Particle, next: &Particle) -> f64 {
+        let clutter = match &self.clutter {
+            ClutterProcess::Fixed(_) => 0.0,
+            ClutterProcess::Switching(hmm) => hmm.log_transition(&previous.clutter, &next.clutter),
+        };
+        let status = match &self.occlusion {
+            OcclusionModel::None => 0.0,
+            OcclusionModel::RandomWalk(walk) => walk.log_transition(
+                &OcclusionState {
+                    gamma: previous.status.gamma,
+                },
+                &OcclusionState {
+                    gamma: next.status.gamma,
+                },
+            ),
+            OcclusionModel::Status(hmm) => {
+                let (alpha, gamma) = (next.status.alpha, next.status.gamma);
+                let kappa = self.settings.locked_gamma_rate;
+                let r = hmm.range(alpha);
+                let width = r.high - r.low;
+                let log_gamma = if alpha == dbn_switch::Status::Locked
+                    && kappa > 0.0
+                    && width > 0.0
+                    && r.contains(gamma)
+                {
+                    kappa.ln() - kappa * (gamma - r.low) - (-(-kappa * width).exp_m1()).ln()
+                } else {
+                    hmm.log_gamma_density(alpha, gamma)
+                };
+                hmm.chain()
+                    .log_transition(previous.status.alpha.index(), alpha.index())
+                    + log_gamma
+            }
+        };
+        clutter + status
+    }
+
     /// Draws the kinematic part x_k ~ p(x_k | x_{k−1}, x_{k−2}).
     pub fn sample_kinematics<R: Rng + ?Sized>(
         &self,

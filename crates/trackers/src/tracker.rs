@@ -10,6 +10,7 @@ use dbn_switch::{
 };
 use motion_est::{MotionEstimator, Pyramid, Region, Workspace};
 use rand_distr::{Distribution, StandardNormal};
+use smc_core::smooth::{SmootherSettings, smooth_marginals};
 use smc_core::{Bootstrap, ParticleFilter, ParticleSet, StepDiagnostics};
 
 use crate::cluster::{Clustering, cluster_particles};
@@ -94,6 +95,22 @@ pub trait Tracker: Send {
 
     /// The `max` most heavily weighted particles, heaviest first.
     fn particles(&self, max: usize) -> Vec<WeightedEllipse>;
+
+    /// The smoothed estimate of every frame after the first, given all frames processed so far
+    /// (see [`crate::smoothing`]), oldest first; `frame` numbers as in [`Tracker::update`]'s
+    /// estimates. Needs a configuration that records its particles
+    /// ([`smc_core::FilterSettings::history`]).
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] when the tracker records nothing (the default implementation),
+    /// or the smoother's error.
+    fn smoothed(&mut self, settings: &SmootherSettings) -> Result<Vec<Estimate>> {
+        let _ = settings;
+        Err(Error::InvalidSetting {
+            name: "filter.history",
+            reason: format!("the {} tracker cannot be smoothed", self.name()),
+        })
+    }
 }
 
 /// Checks an initial ellipse: finite, with positive semi-axes.
@@ -644,6 +661,38 @@ impl Tracker for ParticleTracker {
         report.motion_clusters = motion_clusters;
         report.millis = start.elapsed().as_secs_f64() * 1e3;
         Ok(report)
+    }
+
+    fn smoothed(&mut self, settings: &SmootherSettings) -> Result<Vec<Estimate>> {
+        let Some(history) = self.filter.history().cloned() else {
+            return Err(Error::InvalidSetting {
+                name: "filter.history",
+                reason: "the tracker records no particles: set filter.history to smooth".into(),
+            });
+        };
+        if history.is_empty() {
+            return Ok(Vec::new());
+        }
+        let transition = crate::smoothing::PriorTransition::new(&self.dynamics);
+        let marginals = smooth_marginals(&history, &transition, settings)?;
+        (0..history.len())
+            .map(|t| {
+                let set = marginals.to_particle_set(&history, t)?;
+                let PosteriorSummary {
+                    state,
+                    clutter,
+                    gamma,
+                    status,
+                } = self.estimate(&set)?;
+                let mut e = self.report(state, 0.0)?;
+                e.frame = history.frame(t).map_or(t + 1, |f| f.step as usize);
+                e.ess = set.ess();
+                e.clutter = clutter;
+                e.gamma = gamma;
+                e.status = status;
+                Ok(e)
+            })
+            .collect()
     }
 
     fn particles(&self, max: usize) -> Vec<WeightedEllipse> {

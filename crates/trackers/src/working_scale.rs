@@ -15,6 +15,7 @@
 //! texture averages out, while an outline of the target's size is kept.
 
 use contour_obs::Ellipse;
+use smc_core::smooth::SmootherSettings;
 
 use crate::config::TrackerConfig;
 use crate::frame::Frame;
@@ -274,6 +275,16 @@ impl Tracker for ScaledTracker {
 
     fn update(&mut self, frame: Frame<'_>) -> Result<Estimate> {
         self.on_working_frame(frame, |inner, f| inner.update(f))
+    }
+
+    fn smoothed(&mut self, settings: &SmootherSettings) -> Result<Vec<Estimate>> {
+        let space = self.inner.config().space;
+        Ok(self
+            .inner
+            .smoothed(settings)?
+            .into_iter()
+            .map(|e| self.scale.estimate_to_frame(space, e))
+            .collect())
     }
 
     fn particles(&self, max: usize) -> Vec<WeightedEllipse> {

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
 use scene_synth::Scenario;
-use trackers::{Preset, TrackerConfig};
+use trackers::{Preset, SmootherSettings, TrackerConfig};
 
 use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, Overrides, progress, tracker_config};
 use crate::evaluation::{
@@ -69,6 +69,14 @@ pub enum Evaluation {
         /// Frames of each scene (default: the scenario's length).
         #[arg(long)]
         frames: Option<usize>,
+        /// Runs per scene and tracker: run k renders the scene with seed 1 + k and tracks it with
+        /// seed SEED + k; the table gives the mean and range.
+        #[arg(long, default_value_t = 1)]
+        seeds: usize,
+        /// Also smooth each run (forward filtering–backward smoothing of the recorded particles)
+        /// and score the smoothed estimates, as rows "TRACKER smoothed".
+        #[arg(long)]
+        smooth: bool,
         /// Folder for switching.md and switching.csv.
         #[arg(long, default_value = "track-eval")]
         out: PathBuf,
@@ -208,24 +216,42 @@ pub fn run(args: &Args) -> Result<()> {
             crate::output::println_stdout(&md)?;
             Ok(())
         }
-        Evaluation::Switching { run, frames, out } => {
+        Evaluation::Switching {
+            run,
+            frames,
+            seeds,
+            smooth,
+            out,
+        } => {
             let TrackerRuns {
                 trackers,
                 particles,
                 seed,
             } = run;
             positive("--particles", *particles)?;
+            positive("--seeds", *seeds)?;
             let trackers = presets(
                 trackers,
                 &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full],
             )?;
             crate::output::probe_dir(out)?;
+            let smoother = SmootherSettings::default();
             let mut rows = Vec::new();
             for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
-                let seq = SyntheticSequence::render(scenario, *frames, 1, &[])?;
-                for t in &trackers {
-                    let output = seq.track(t.config(*particles, *seed), None)?;
-                    rows.push(switching_scores(&seq, t.name(), &output.records));
+                for k in 0..*seeds as u64 {
+                    let seq = SyntheticSequence::render(scenario, *frames, 1 + k, &[])?;
+                    for t in &trackers {
+                        let config = t.config(*particles, *seed + k);
+                        if *smooth {
+                            let (output, smoothed) = seq.track_and_smooth(config, &smoother)?;
+                            rows.push(switching_scores(&seq, t.name(), &output.records));
+                            let name = format!("{} smoothed", t.name());
+                            rows.push(switching_scores(&seq, &name, &smoothed));
+                        } else {
+                            let output = seq.track(config, None)?;
+                            rows.push(switching_scores(&seq, t.name(), &output.records));
+                        }
+                    }
                 }
             }
             let md = switching_markdown(&rows);

@@ -98,6 +98,12 @@ pub struct Args {
     /// girl_mil 24 works better (docs/RESULTS.md).
     #[arg(long)]
     pub edge_threshold: Option<f32>,
+    /// Also smooth the run once every frame is tracked (forward filtering–backward smoothing of
+    /// the recorded particles: each frame's estimate given the whole sequence) and write
+    /// OUT/smoothed.csv (the columns of track.csv) and OUT/smoothed_boxes.txt. Memory grows with
+    /// frames × particles; not for the head tracker, nor for a stream that is interrupted.
+    #[arg(long)]
+    pub smooth: bool,
     /// No progress bar and no summary.
     #[arg(long)]
     pub quiet: bool,
@@ -281,9 +287,11 @@ pub fn progress(len: u64, quiet: bool, what: &str) -> ProgressBar {
 /// The files `track run` writes in `--out`, besides `overlay/NNNN.png` and `plots/*.svg`. At the
 /// start of a run, after its inputs are checked, the previous run's files of these names are
 /// removed, so a folder never mixes two runs.
-pub const OUTPUT_FILES: [&str; 5] = [
+pub const OUTPUT_FILES: [&str; 7] = [
     "track.csv",
     "boxes.txt",
+    "smoothed.csv",
+    "smoothed_boxes.txt",
     "summary.json",
     "track.gif",
     "report.html",
@@ -399,6 +407,19 @@ pub fn run(args: &Args) -> Result<()> {
             ));
         }
     };
+    let mut config = config;
+    if args.smooth {
+        if config.region.is_some() {
+            return Err(AppError::setting(
+                "--smooth",
+                format!(
+                    "the {} tracker cannot be smoothed (only the contour trackers record their particles)",
+                    config.name
+                ),
+            ));
+        }
+        config.filter.history = Some(Default::default());
+    }
     let tracker = trackers::build(config.clone())
         .map_err(|e| AppError::setting("--tracker", e.to_string()))?;
     // Everything the run reads is checked; now the output folder, before any tracking.
@@ -514,6 +535,12 @@ pub fn run(args: &Args) -> Result<()> {
             out: args.out.clone(),
         });
     }
+    // A smoother needs the whole run: an interrupted one is written as filtered only.
+    let smoothed = if args.smooth && stop.is_none() {
+        Some(session.smoothed(&trackers::SmootherSettings::default())?)
+    } else {
+        None
+    };
     let output = session.finish();
     let records = output.records;
     if records.is_empty() {
@@ -545,6 +572,18 @@ pub fn run(args: &Args) -> Result<()> {
         boxes_with_gap(start, &records).as_bytes(),
     )?;
     written.extend(["track.csv".to_owned(), "boxes.txt".to_owned()]);
+    if let Some(smoothed) = &smoothed {
+        write_csv_with(
+            &args.out.join("smoothed.csv"),
+            smoothed,
+            CsvColumns::of_tracker(&config),
+        )?;
+        write_atomic(
+            &args.out.join("smoothed_boxes.txt"),
+            boxes_with_gap(start, smoothed).as_bytes(),
+        )?;
+        written.extend(["smoothed.csv".to_owned(), "smoothed_boxes.txt".to_owned()]);
+    }
     if args.gif {
         let every = gif.stride();
         let frames: Vec<RgbImage> = gif.into_items().into_iter().map(|(_, f)| f).collect();

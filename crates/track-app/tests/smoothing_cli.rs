@@ -1,0 +1,64 @@
+//! `track run --smooth` (issue 19): smoothed estimates written beside the filtered ones.
+
+mod common;
+
+use common::{DISC_INIT, disc_frames, one_error_line, s, track};
+
+#[test]
+fn run_smooth_writes_the_smoothed_track_beside_the_filtered_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = disc_frames(dir.path(), "disc", 12);
+    let out = dir.path().join("out");
+    let run = track(&[
+        "run",
+        "--tracker",
+        "w-eval",
+        "--particles",
+        "60",
+        "--smooth",
+        "--quiet",
+        "--init",
+        DISC_INIT,
+        "--out",
+        s(&out),
+        s(&frames),
+    ]);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let filtered = std::fs::read_to_string(out.join("track.csv")).unwrap();
+    let smoothed = std::fs::read_to_string(out.join("smoothed.csv")).unwrap();
+    let header = |t: &str| t.lines().next().unwrap().to_owned();
+    assert_eq!(header(&filtered), header(&smoothed));
+    assert_eq!(filtered.lines().count(), 13);
+    assert_eq!(smoothed.lines().count(), 13);
+    let boxes = std::fs::read_to_string(out.join("smoothed_boxes.txt")).unwrap();
+    assert_eq!(boxes.lines().count(), 12);
+    // Without --smooth a rerun into the same folder leaves no stale smoothed files.
+    let again = track(&[
+        "run",
+        "--tracker",
+        "w-eval",
+        "--particles",
+        "60",
+        "--quiet",
+        "--init",
+        DISC_INIT,
+        "--out",
+        s(&out),
+        s(&frames),
+    ]);
+    assert!(again.status.success());
+    assert!(!out.join("smoothed.csv").exists() && !out.join("smoothed_boxes.txt").exists());
+    // The head tracker records no particles: a setting error, exit 2.
+    let head = track(&[
+        "run",
+        "--smooth",
+        "--quiet",
+        "--init",
+        DISC_INIT,
+        "--out",
+        s(&dir.path().join("head")),
+        s(&frames),
+    ]);
+    assert_eq!(head.status.code(), Some(2));
+    assert!(one_error_line(&head).contains("--smooth"));
+}
