@@ -48,6 +48,7 @@ mod markov;
 mod occlusion;
 #[cfg(test)]
 mod proptests;
+mod smooth;
 mod status;
 mod switching;
 #[cfg(test)]
@@ -60,5 +61,6 @@ pub use estimate::{argmax, class_probabilities_into};
 pub use filter::ForwardResult;
 pub use markov::{MarkovChain, ROW_SUM_TOLERANCE, validate_matrix};
 pub use occlusion::{OcclusionConfig, OcclusionEstimate, OcclusionProcess, OcclusionState};
+pub use smooth::SmoothedChain;
 pub use status::{GammaRange, Status, StatusConfig, StatusEstimate, StatusHmm, StatusState};
 pub use switching::SwitchingConfig;

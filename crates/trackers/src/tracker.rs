@@ -675,21 +675,19 @@ impl Tracker for ParticleTracker {
         }
         let transition = crate::smoothing::PriorTransition::new(&self.dynamics);
         let marginals = smooth_marginals(&history, &transition, settings)?;
-        (0..history.len())
-            .map(|t| {
+        let hidden = crate::smoothing::smooth_hidden(&self.dynamics, &history)?;
+        hidden
+            .into_iter()
+            .enumerate()
+            .map(|(t, h)| {
                 let set = marginals.to_particle_set(&history, t)?;
-                let PosteriorSummary {
-                    state,
-                    clutter,
-                    gamma,
-                    status,
-                } = self.estimate(&set)?;
+                let state = self.estimate(&set)?.state;
                 let mut e = self.report(state, 0.0)?;
                 e.frame = history.frame(t).map_or(t + 1, |f| f.step as usize);
                 e.ess = set.ess();
-                e.clutter = clutter;
-                e.gamma = gamma;
-                e.status = status;
+                e.clutter = h.clutter;
+                e.gamma = h.gamma;
+                e.status = h.status;
                 Ok(e)
             })
             .collect()
