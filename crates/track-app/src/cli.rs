@@ -43,6 +43,9 @@ pub enum Command {
     Motion(commands::motion::Args),
     /// Learn clutter densities from images (Wu et al. §6.1).
     LearnClutter(commands::learn_clutter::Args),
+    /// Learn a tracker's switching parameters (T_β, T_α, σ_γ, λ̄_k) from sequences by
+    /// expectation–maximisation on smoothed runs.
+    LearnSwitching(commands::learn_switching::Args),
     /// Print a preset's full configuration (JSON or TOML), to edit and pass to `--config`.
     Config(commands::config::Args),
 }
@@ -58,6 +61,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Eval(args) => commands::eval::run(&args),
         Command::Motion(args) => commands::motion::run(&args),
         Command::LearnClutter(args) => commands::learn_clutter::run(&args),
+        Command::LearnSwitching(args) => commands::learn_switching::run(&args),
         Command::Config(args) => commands::config::run(&args),
     }
 }

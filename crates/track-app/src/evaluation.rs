@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 use scene_synth::{FrameTruth, Scenario, ScenarioParams, Scene};
-use trackers::{Preset, SmootherSettings, TrackerConfig};
+use trackers::{Preset, SmootherSettings, SwitchingStatistics, TrackerConfig};
 
 use crate::groundtruth::{Box2, Ellipse};
 use crate::metrics::first_failure;
@@ -104,7 +104,7 @@ impl SyntheticSequence {
     }
 
     /// Tracks the whole sequence with `config` recording its particles, and smooths the run:
-    /// the filtered records and the smoothed ones.
+    /// the filtered records, the smoothed ones and the run's switching statistics.
     ///
     /// # Errors
     /// An invalid configuration, a tracker failure or a smoother failure.
@@ -112,7 +112,7 @@ impl SyntheticSequence {
         &self,
         mut config: TrackerConfig,
         smoother: &SmootherSettings,
-    ) -> Result<(SessionOutput, Vec<FrameRecord>)> {
+    ) -> Result<(SessionOutput, Vec<FrameRecord>, SwitchingStatistics)> {
         config.filter.history = Some(Default::default());
         let init = self.initial_ellipse()?;
         let tracker =
@@ -121,8 +121,8 @@ impl SyntheticSequence {
         for (k, f) in self.frames.iter().enumerate() {
             session.push(f, &init, self.truth_box(k))?;
         }
-        let smoothed = session.smoothed(smoother)?;
-        Ok((session.finish(), smoothed))
+        let (smoothed, statistics) = session.smoothed(smoother)?;
+        Ok((session.finish(), smoothed, statistics))
     }
 
     /// IoU of each record's box with the true box.

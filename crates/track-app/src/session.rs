@@ -6,7 +6,7 @@
 
 use contour_obs::Ellipse as ContourEllipse;
 use image::RgbImage;
-use trackers::{Estimate, SmootherSettings, Tracker};
+use trackers::{Estimate, SmootherSettings, SwitchingStatistics, Tracker};
 
 use crate::groundtruth::{Box2, Ellipse};
 use crate::record::{FrameRecord, TrackerStatus};
@@ -196,16 +196,21 @@ impl Session {
     }
 
     /// The smoothed record of every frame so far (see `trackers::smoothing`): the first
-    /// frame's record as filtered (the initialisation), then the tracker's smoothed estimates.
+    /// frame's record as filtered (the initialisation), then the tracker's smoothed estimates;
+    /// and the run's switching statistics.
     ///
     /// # Errors
     /// [`AppError::Computation`] when the tracker cannot be smoothed (its configuration records
     /// no particles) or the smoother fails.
-    pub fn smoothed(&mut self, settings: &SmootherSettings) -> Result<Vec<FrameRecord>> {
-        let estimates = self
+    pub fn smoothed(
+        &mut self,
+        settings: &SmootherSettings,
+    ) -> Result<(Vec<FrameRecord>, SwitchingStatistics)> {
+        let run = self
             .tracker
             .smoothed(settings)
             .map_err(|e| AppError::computation("smoothing", e))?;
+        let estimates = run.estimates;
         let mut records: Vec<FrameRecord> = self.records.first().cloned().into_iter().collect();
         for e in &estimates {
             let Some(filtered) = self.records.get(e.frame) else {
@@ -221,7 +226,7 @@ impl Session {
             r.millis = filtered.millis;
             records.push(r);
         }
-        Ok(records)
+        Ok((records, run.statistics))
     }
 
     /// Ends the session.

@@ -78,7 +78,7 @@ pub use observation::{ImplicitMotionSettings, LikelihoodSettings};
 pub use particle::Particle;
 pub use region::{RegionSettings, RegionTracker};
 pub use smc_core::smooth::SmootherSettings;
-pub use smoothing::PriorTransition;
+pub use smoothing::{ChainCounts, PriorTransition, SmoothedRun, SwitchingStatistics};
 pub use space::ShapeSpace;
 pub use tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, build};
 pub use working_scale::{ScaledTracker, WorkingScale};

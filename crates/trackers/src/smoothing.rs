@@ -35,6 +35,16 @@ use crate::Result;
 use crate::dynamics::{ClutterProcess, OcclusionModel, TrackerDynamics};
 use crate::particle::Particle;
 
+/// What [`crate::Tracker::smoothed`] gives: the smoothed estimates and the run's switching
+/// statistics.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SmoothedRun {
+    /// The smoothed estimate of every frame after the first, oldest first.
+    pub estimates: Vec<crate::Estimate>,
+    /// The expected statistics of the switching parameters (see [`SwitchingStatistics`]).
+    pub statistics: SwitchingStatistics,
+}
+
 /// Bins of γ ∈ [0, 1] for smoothing the random walk of Wu Eq. 13 as a finite chain.
 pub const GAMMA_BINS: usize = 20;
 
@@ -67,14 +77,16 @@ fn class_sums<'a>(
     (mass, sums)
 }
 
-/// Smooths the hidden processes of every frame of `history` (see the module docs).
+/// Smooths the hidden processes of every frame of `history` (see the module docs), and gathers
+/// the expected statistics that re-estimate their parameters ([`SwitchingStatistics`]).
 ///
 /// # Errors
 /// A filtered marginal the chain cannot have produced.
 pub fn smooth_hidden(
     dynamics: &TrackerDynamics,
     history: &History<Particle>,
-) -> Result<Vec<SmoothedHidden>> {
+) -> Result<(Vec<SmoothedHidden>, SwitchingStatistics)> {
+    let mut statistics = SwitchingStatistics::default();
     let frames: Vec<_> = history.frames().collect();
     let weighted = |t: usize| {
         let set = &frames[t].set;
@@ -102,8 +114,13 @@ pub fn smooth_hidden(
             .collect();
         let filtered: Vec<Vec<f64>> = sums.iter().map(|(m, _)| m.clone()).collect();
         let smoothed = hmm.chain().smooth_filtered(&filtered)?;
+        let (mut occupancy, mut lambda_sums) = (vec![0.0; n], vec![0.0; n]);
         for ((o, s), (mass, lambda)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
             let overall = lambda.iter().sum::<f64>() / mass.iter().sum::<f64>();
+            for k in 0..n {
+                occupancy[k] += s[k];
+                lambda_sums[k] += s[k] * conditional_mean(mass, lambda, k, overall);
+            }
             o.clutter = Some(ClutterEstimate {
                 beta_hat: argmax(s),
                 beta_probs: s.clone(),
@@ -112,6 +129,11 @@ pub fn smooth_hidden(
                     .sum(),
             });
         }
+        statistics.beta = Some(ChainCounts {
+            transitions: smoothed.transitions,
+            occupancy,
+        });
+        statistics.lambda_sums = Some(lambda_sums);
     }
     match &dynamics.occlusion {
         OcclusionModel::None => {}
@@ -128,6 +150,7 @@ pub fn smooth_hidden(
                 .collect();
             let filtered: Vec<Vec<f64>> = sums.iter().map(|(m, _)| m.clone()).collect();
             let smoothed = hmm.chain().smooth_filtered(&filtered)?;
+            statistics.alpha = Some(ChainCounts::of(&smoothed));
             for ((o, s), (mass, gamma)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
                 let mut gamma_hat = 0.0;
                 for (k, status) in Status::ALL.into_iter().enumerate() {
@@ -165,6 +188,17 @@ pub fn smooth_hidden(
                 .collect();
             let filtered: Vec<Vec<f64>> = sums.iter().map(|(m, _)| m.clone()).collect();
             let smoothed = chain.smooth_filtered(&filtered)?;
+            // E[(γ_{t+1} − γ_t)²] from the two-step marginals over the bins, less the variance
+            // that binning adds (two uniform errors of a bin's width).
+            let (mut squares, mut steps) = (0.0, 0.0);
+            for (i, row) in smoothed.transitions.iter().enumerate() {
+                for (j, x) in row.iter().enumerate() {
+                    squares += x * (centre(j) - centre(i)).powi(2);
+                    steps += x;
+                }
+            }
+            let binning = 2.0 / (12.0 * (k * k) as f64);
+            statistics.gamma_steps = Some(((squares - binning * steps).max(0.0), steps));
             for ((o, s), (mass, gamma)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
                 o.gamma = Some(
                     (0..k)
@@ -174,7 +208,127 @@ pub fn smooth_hidden(
             }
         }
     }
-    Ok(out)
+    Ok((out, statistics))
+}
+
+/// Expected counts of one chain over a smoothed run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChainCounts {
+    /// `transitions[i][j]`: Σ_t p(s_t = i, s_{t+1} = j | Z).
+    pub transitions: Vec<Vec<f64>>,
+    /// `occupancy[i]`: Σ_t p(s_t = i | Z).
+    pub occupancy: Vec<f64>,
+}
+
+impl ChainCounts {
+    fn of(smoothed: &dbn_switch::SmoothedChain) -> Self {
+        let n = smoothed.transitions.len();
+        let mut occupancy = vec![0.0; n];
+        for m in &smoothed.marginals {
+            for (o, v) in occupancy.iter_mut().zip(m) {
+                *o += v;
+            }
+        }
+        Self {
+            transitions: smoothed.transitions.clone(),
+            occupancy,
+        }
+    }
+
+    fn add(&mut self, other: &Self) {
+        for (a, b) in self.transitions.iter_mut().zip(&other.transitions) {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y;
+            }
+        }
+        for (x, y) in self.occupancy.iter_mut().zip(&other.occupancy) {
+            *x += y;
+        }
+    }
+
+    /// The maximum-likelihood transition matrix: each row of expected counts normalised; a
+    /// row with no count keeps `fallback`'s row.
+    pub fn transition_matrix(&self, fallback: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        self.transitions
+            .iter()
+            .zip(fallback)
+            .map(|(row, old)| {
+                let total: f64 = row.iter().sum();
+                if total > 1e-9 {
+                    row.iter().map(|x| x / total).collect()
+                } else {
+                    old.clone()
+                }
+            })
+            .collect()
+    }
+}
+
+/// The expected sufficient statistics of the switching parameters over one or more smoothed
+/// runs: the E-step of expectation–maximisation (Baum–Welch on the particle approximation).
+/// [`SwitchingStatistics::maximise`] is the M-step.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SwitchingStatistics {
+    /// The clutter classes β (with the {β, λ} HMM).
+    pub beta: Option<ChainCounts>,
+    /// Σ_t p(β_t = k | Z) E[λ_t | β_t = k], for λ̄_k.
+    pub lambda_sums: Option<Vec<f64>>,
+    /// The statuses α (with the status HMM).
+    pub alpha: Option<ChainCounts>,
+    /// Σ E[(γ_{t+1} − γ_t)²] and the number of steps (with the γ random walk).
+    pub gamma_steps: Option<(f64, f64)>,
+}
+
+impl SwitchingStatistics {
+    /// Adds another run's statistics (of the same tracker).
+    pub fn add(&mut self, other: &Self) {
+        fn merge<T: Clone>(a: &mut Option<T>, b: &Option<T>, f: impl FnOnce(&mut T, &T)) {
+            match (a.as_mut(), b) {
+                (Some(x), Some(y)) => f(x, y),
+                (None, Some(y)) => *a = Some(y.clone()),
+                _ => {}
+            }
+        }
+        merge(&mut self.beta, &other.beta, ChainCounts::add);
+        merge(&mut self.alpha, &other.alpha, ChainCounts::add);
+        merge(&mut self.lambda_sums, &other.lambda_sums, |x, y| {
+            x.iter_mut().zip(y).for_each(|(a, b)| *a += b)
+        });
+        merge(&mut self.gamma_steps, &other.gamma_steps, |x, y| {
+            x.0 += y.0;
+            x.1 += y.1;
+        });
+    }
+
+    /// The M-step: writes into `config` the transition matrices T_β and T_α, σ_γ of the γ random
+    /// walk and, when `lambda` is set, the class means λ̄_k, each where the statistics have it.
+    /// The result is validated.
+    ///
+    /// # Errors
+    /// A configuration the new values make invalid.
+    pub fn maximise(&self, config: &mut crate::TrackerConfig, lambda: bool) -> Result<()> {
+        use crate::config::{ClutterMode, OcclusionMode};
+        if let (ClutterMode::Switching(c), Some(beta)) = (&mut config.clutter, &self.beta) {
+            c.transition = beta.transition_matrix(&c.transition);
+            if let (true, Some(sums)) = (lambda, &self.lambda_sums) {
+                for ((mean, s), occ) in c.lambda_mean.iter_mut().zip(sums).zip(&beta.occupancy) {
+                    if *occ > 1e-9 {
+                        *mean = s / occ;
+                    }
+                }
+            }
+        }
+        match (&mut config.occlusion, &self.alpha, self.gamma_steps) {
+            (OcclusionMode::Status(c), Some(alpha), _) => {
+                c.transition = alpha.transition_matrix(&c.transition);
+            }
+            (OcclusionMode::RandomWalk(c), _, Some((squares, steps))) if steps > 0.0 => {
+                c.sigma_gamma = (squares / steps).sqrt().max(1e-3);
+            }
+            _ => {}
+        }
+        config.validate()
+    }
 }
 
 /// A tracker's prior as the smoothers' transition density (see the module docs).

@@ -21,6 +21,7 @@ use crate::observation::{FrameObservation, LikelihoodModel, ReferenceLines};
 use crate::particle::{Particle, default_status};
 use crate::proposal::{ClusterMotion, MotionProposal, state_increment};
 use crate::reacquire::{Reacquisition, TrackMemory};
+use crate::smoothing::SmoothedRun;
 use crate::space::{STATE_SLOTS, ShapeBounds, StateVector, UNBOUNDED_CENTRE, axpy, pose_box};
 use crate::visibility::{self, Visibility};
 use crate::{Error, Result};
@@ -97,14 +98,15 @@ pub trait Tracker: Send {
     fn particles(&self, max: usize) -> Vec<WeightedEllipse>;
 
     /// The smoothed estimate of every frame after the first, given all frames processed so far
-    /// (see [`crate::smoothing`]), oldest first; `frame` numbers as in [`Tracker::update`]'s
-    /// estimates. Needs a configuration that records its particles
+    /// (see [`crate::smoothing`]), oldest first, `frame` numbered as in [`Tracker::update`]'s
+    /// estimates; and the expected statistics of the switching parameters over the run (the E-step
+    /// of learning them). Needs a configuration that records its particles
     /// ([`smc_core::FilterSettings::history`]).
     ///
     /// # Errors
     /// [`Error::InvalidSetting`] when the tracker records nothing (the default implementation),
     /// or the smoother's error.
-    fn smoothed(&mut self, settings: &SmootherSettings) -> Result<Vec<Estimate>> {
+    fn smoothed(&mut self, settings: &SmootherSettings) -> Result<SmoothedRun> {
         let _ = settings;
         Err(Error::InvalidSetting {
             name: "filter.history",
@@ -663,7 +665,7 @@ impl Tracker for ParticleTracker {
         Ok(report)
     }
 
-    fn smoothed(&mut self, settings: &SmootherSettings) -> Result<Vec<Estimate>> {
+    fn smoothed(&mut self, settings: &SmootherSettings) -> Result<SmoothedRun> {
         let Some(history) = self.filter.history().cloned() else {
             return Err(Error::InvalidSetting {
                 name: "filter.history",
@@ -671,12 +673,15 @@ impl Tracker for ParticleTracker {
             });
         };
         if history.is_empty() {
-            return Ok(Vec::new());
+            return Ok(SmoothedRun {
+                estimates: Vec::new(),
+                statistics: Default::default(),
+            });
         }
         let transition = crate::smoothing::PriorTransition::new(&self.dynamics);
         let marginals = smooth_marginals(&history, &transition, settings)?;
-        let hidden = crate::smoothing::smooth_hidden(&self.dynamics, &history)?;
-        hidden
+        let (hidden, statistics) = crate::smoothing::smooth_hidden(&self.dynamics, &history)?;
+        let estimates = hidden
             .into_iter()
             .enumerate()
             .map(|(t, h)| {
@@ -690,7 +695,11 @@ impl Tracker for ParticleTracker {
                 e.status = h.status;
                 Ok(e)
             })
-            .collect()
+            .collect::<Result<Vec<_>>>()?;
+        Ok(SmoothedRun {
+            estimates,
+            statistics,
+        })
     }
 
     fn particles(&self, max: usize) -> Vec<WeightedEllipse> {

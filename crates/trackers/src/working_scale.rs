@@ -19,6 +19,7 @@ use smc_core::smooth::SmootherSettings;
 
 use crate::config::TrackerConfig;
 use crate::frame::Frame;
+use crate::smoothing::SmoothedRun;
 use crate::space::ShapeSpace;
 use crate::tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, check_initial};
 use crate::{Error, Result};
@@ -277,14 +278,13 @@ impl Tracker for ScaledTracker {
         self.on_working_frame(frame, |inner, f| inner.update(f))
     }
 
-    fn smoothed(&mut self, settings: &SmootherSettings) -> Result<Vec<Estimate>> {
+    fn smoothed(&mut self, settings: &SmootherSettings) -> Result<SmoothedRun> {
         let space = self.inner.config().space;
-        Ok(self
-            .inner
-            .smoothed(settings)?
-            .into_iter()
-            .map(|e| self.scale.estimate_to_frame(space, e))
-            .collect())
+        let mut run = self.inner.smoothed(settings)?;
+        for e in &mut run.estimates {
+            *e = self.scale.estimate_to_frame(space, e.clone());
+        }
+        Ok(run)
     }
 
     fn particles(&self, max: usize) -> Vec<WeightedEllipse> {

@@ -45,7 +45,10 @@ fn the_smoothed_run_covers_every_frame_and_ends_where_the_filter_ends() {
                 let (w, h, pixels) = frame_at(k);
                 filtered.push(tracker.update(Frame::new(w, h, &pixels).unwrap()).unwrap());
             }
-            let smoothed = tracker.smoothed(&SmootherSettings::default()).unwrap();
+            let smoothed = tracker
+                .smoothed(&SmootherSettings::default())
+                .unwrap()
+                .estimates;
             assert_eq!(smoothed.len(), filtered.len(), "{preset}");
             for (k, e) in smoothed.iter().enumerate() {
                 assert_eq!(e.frame, k + 1, "{preset}");
@@ -77,7 +80,10 @@ fn the_smoothed_run_covers_every_frame_and_ends_where_the_filter_ends() {
             // The same run smooths to the same result.
             assert_eq!(
                 smoothed,
-                tracker.smoothed(&SmootherSettings::default()).unwrap()
+                tracker
+                    .smoothed(&SmootherSettings::default())
+                    .unwrap()
+                    .estimates
             );
         }
     }

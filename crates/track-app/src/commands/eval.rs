@@ -11,7 +11,7 @@ use crate::evaluation::{
     SyntheticSequence, TABLE1_COLUMNS, TABLE1_TRACKERS, switching_csv, switching_markdown,
     switching_scores, table1, table1_csv, table1_markdown,
 };
-use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
+use crate::groundtruth::{Box2, check_groundtruth_len, first_box_in_frame, load_groundtruth};
 use crate::metrics::{SequenceMetrics, evaluate, mean_metrics, with_self_evaluation};
 use crate::output::write_atomic;
 use crate::sequence::{FrameSource, open_sequence};
@@ -77,6 +77,10 @@ pub enum Evaluation {
         /// and score the smoothed estimates, as rows "TRACKER smoothed".
         #[arg(long)]
         smooth: bool,
+        /// A tracker configuration file (JSON or TOML, as `track config` or `track
+        /// learn-switching` write), run beside the presets (repeatable).
+        #[arg(long = "config")]
+        configs: Vec<PathBuf>,
         /// Folder for switching.md and switching.csv.
         #[arg(long, default_value = "track-eval")]
         out: PathBuf,
@@ -221,6 +225,7 @@ pub fn run(args: &Args) -> Result<()> {
             frames,
             seeds,
             smooth,
+            configs,
             out,
         } => {
             let TrackerRuns {
@@ -230,26 +235,44 @@ pub fn run(args: &Args) -> Result<()> {
             } = run;
             positive("--particles", *particles)?;
             positive("--seeds", *seeds)?;
-            let trackers = presets(
-                trackers,
-                &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full],
-            )?;
+            let default: &[Preset] = if configs.is_empty() {
+                &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full]
+            } else {
+                &[]
+            };
+            let mut runs: Vec<TrackerConfig> = presets(trackers, default)?
+                .into_iter()
+                .map(|p| p.config(*particles, *seed))
+                .collect();
+            for path in configs {
+                let overrides = Overrides {
+                    particles: Some(*particles),
+                    seed: Some(*seed),
+                    parallel: false,
+                    edge_threshold: None,
+                };
+                runs.push(tracker_config("", Some(path), overrides)?);
+            }
             crate::output::probe_dir(out)?;
             let smoother = SmootherSettings::default();
             let mut rows = Vec::new();
             for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
                 for k in 0..*seeds as u64 {
                     let seq = SyntheticSequence::render(scenario, *frames, 1 + k, &[])?;
-                    for t in &trackers {
-                        let config = t.config(*particles, *seed + k);
+                    for run in &runs {
+                        let config = TrackerConfig {
+                            seed: *seed + k,
+                            ..run.clone()
+                        };
+                        let name = run.name.clone();
                         if *smooth {
-                            let (output, smoothed) = seq.track_and_smooth(config, &smoother)?;
-                            rows.push(switching_scores(&seq, t.name(), &output.records));
-                            let name = format!("{} smoothed", t.name());
-                            rows.push(switching_scores(&seq, &name, &smoothed));
+                            let (output, smoothed, _) = seq.track_and_smooth(config, &smoother)?;
+                            rows.push(switching_scores(&seq, &name, &output.records));
+                            let smoothed_name = format!("{name} smoothed");
+                            rows.push(switching_scores(&seq, &smoothed_name, &smoothed));
                         } else {
                             let output = seq.track(config, None)?;
-                            rows.push(switching_scores(&seq, t.name(), &output.records));
+                            rows.push(switching_scores(&seq, &name, &output.records));
                         }
                     }
                 }
@@ -322,8 +345,14 @@ fn sequence_name(dir: &Path) -> String {
         .unwrap_or_else(|| dir.display().to_string())
 }
 
-/// Tracks one OTB folder from its first labelled box and scores it.
-fn evaluate_otb(dir: &Path, config: &TrackerConfig, quiet: bool) -> Result<SequenceMetrics> {
+/// Tracks one OTB folder with `config` from its first labelled box (the frames before it are
+/// skipped); returns the session (to finish, or to smooth first), the index of the first tracked
+/// frame and the ground truth.
+pub(crate) fn track_otb(
+    dir: &Path,
+    config: &TrackerConfig,
+    quiet: bool,
+) -> Result<(Session, usize, Vec<Option<Box2>>)> {
     let spec = dir.to_string_lossy();
     let mut sequence = open_sequence(&spec)?;
     let gt_path = sequence.groundtruth.clone().ok_or_else(|| {
@@ -353,6 +382,12 @@ fn evaluate_otb(dir: &Path, config: &TrackerConfig, quiet: bool) -> Result<Seque
         }
     }
     bar.finish_and_clear();
+    Ok((session, start, truth))
+}
+
+/// Tracks one OTB folder from its first labelled box and scores it.
+fn evaluate_otb(dir: &Path, config: &TrackerConfig, quiet: bool) -> Result<SequenceMetrics> {
+    let (session, start, truth) = track_otb(dir, config, quiet)?;
     let output = session.finish();
     let boxes: Vec<_> = output.records.iter().map(|r| r.bbox).collect();
     // The initialisation frame is given, not tracked: it is not scored (as in PEERS.md).

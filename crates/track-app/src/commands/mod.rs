@@ -4,5 +4,6 @@ pub mod config;
 pub mod demo;
 pub mod eval;
 pub mod learn_clutter;
+pub mod learn_switching;
 pub mod motion;
 pub mod run;

@@ -537,7 +537,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     // A smoother needs the whole run: an interrupted one is written as filtered only.
     let smoothed = if args.smooth && stop.is_none() {
-        Some(session.smoothed(&trackers::SmootherSettings::default())?)
+        Some(session.smoothed(&trackers::SmootherSettings::default())?.0)
     } else {
         None
     };
