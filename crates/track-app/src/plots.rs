@@ -187,7 +187,10 @@ fn y_range(values: impl Iterator<Item = f64>, floor: Option<f64>) -> (f64, f64) 
 ///
 /// # Errors
 /// [`AppError::Computation`] for a non-finite probability (naming the frame) or a plotting failure.
-pub fn plot_beta(records: &[FrameRecord]) -> Result<Option<Figure>> {
+pub fn plot_beta(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+) -> Result<Option<Figure>> {
     let k = records
         .iter()
         .map(|r| r.beta_probs.len())
@@ -204,14 +207,12 @@ pub fn plot_beta(records: &[FrameRecord]) -> Result<Option<Figure>> {
     if k == 0 {
         return Ok(None);
     }
-    let hat = Series {
-        label: String::new(),
-        colour: RGBColor(30, 30, 30),
-        points: records
-            .iter()
+    let beta_hat = |rs: &[FrameRecord]| -> Vec<(f64, f64)> {
+        rs.iter()
             .filter_map(|r| r.beta_hat.map(|b| (fx(r), b as f64)))
-            .collect(),
+            .collect()
     };
+    let hat = hat_series(beta_hat(records), smoothed.map(beta_hat));
     let mut probs = Vec::with_capacity(k);
     for c in 0..k {
         let mut points = Vec::new();
@@ -225,6 +226,15 @@ pub fn plot_beta(records: &[FrameRecord]) -> Result<Option<Figure>> {
             colour: rgb(CLUTTER[c % CLUTTER.len()]),
             points,
         });
+        if let Some(smoothed) = smoothed {
+            probs.push(probability_series(
+                smoothed,
+                |r| r.beta_probs.get(c).copied(),
+                format!("P(β = {c}) smoothed"),
+                rgb(CLUTTER[c % CLUTTER.len()]),
+                "a clutter-class probability",
+            )?);
+        }
     }
     let names: Vec<String> = (0..k).map(|c| format!("β={c}")).collect();
     let names: Vec<&str> = names.iter().map(String::as_str).collect();
@@ -235,7 +245,7 @@ pub fn plot_beta(records: &[FrameRecord]) -> Result<Option<Figure>> {
                 "β̂",
                 (-0.5, k as f64 - 0.5),
                 Some(&names),
-                vec![hat],
+                hat,
             ),
             (
                 "clutter-class probabilities",
@@ -255,8 +265,10 @@ pub fn plot_beta(records: &[FrameRecord]) -> Result<Option<Figure>> {
 }
 
 /// A single-series figure of an optional per-frame value; `None` when no record has it.
+#[allow(clippy::too_many_arguments)]
 fn scalar_figure(
     records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
     name: &'static str,
     title: &str,
     y_label: &str,
@@ -273,12 +285,34 @@ fn scalar_figure(
     if points.is_empty() {
         return Ok(None);
     }
-    let range = fixed_range.unwrap_or_else(|| y_range(points.iter().map(|p| p.1), Some(0.0)));
-    let series = vec![Series {
-        label: String::new(),
+    let mut series = vec![Series {
+        label: if smoothed.is_some() {
+            "filtered".into()
+        } else {
+            String::new()
+        },
         colour,
         points,
     }];
+    if let Some(smoothed) = smoothed {
+        let mut points = Vec::new();
+        for r in smoothed {
+            if let Some(v) = get(r) {
+                points.push((fx(r), finite(v, r.frame, y_label)?));
+            }
+        }
+        series.push(Series {
+            label: "smoothed".into(),
+            colour: SMOOTHED,
+            points,
+        });
+    }
+    let range = fixed_range.unwrap_or_else(|| {
+        y_range(
+            series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
+            Some(0.0),
+        )
+    });
     let svg = render(&[(title, y_label, range, None, series)], x_max(records))?;
     Ok(Some(Figure {
         name,
@@ -291,9 +325,13 @@ fn scalar_figure(
 ///
 /// # Errors
 /// As [`plot_beta`].
-pub fn plot_lambda(records: &[FrameRecord]) -> Result<Option<Figure>> {
+pub fn plot_lambda(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+) -> Result<Option<Figure>> {
     scalar_figure(
         records,
+        smoothed,
         "lambda",
         "clutter density λ̂ (edges per pixel)",
         "λ̂",
@@ -307,9 +345,13 @@ pub fn plot_lambda(records: &[FrameRecord]) -> Result<Option<Figure>> {
 ///
 /// # Errors
 /// As [`plot_beta`].
-pub fn plot_gamma(records: &[FrameRecord]) -> Result<Option<Figure>> {
+pub fn plot_gamma(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+) -> Result<Option<Figure>> {
     scalar_figure(
         records,
+        smoothed,
         "gamma",
         "occlusion γ̂",
         "γ̂",
@@ -323,9 +365,13 @@ pub fn plot_gamma(records: &[FrameRecord]) -> Result<Option<Figure>> {
 ///
 /// # Errors
 /// As [`plot_beta`].
-pub fn plot_ess(records: &[FrameRecord]) -> Result<Option<Figure>> {
+pub fn plot_ess(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+) -> Result<Option<Figure>> {
     scalar_figure(
         records,
+        smoothed,
         "ess",
         "effective sample size",
         "ESS",
@@ -340,21 +386,22 @@ pub fn plot_ess(records: &[FrameRecord]) -> Result<Option<Figure>> {
 ///
 /// # Errors
 /// As [`plot_beta`].
-pub fn plot_alpha(records: &[FrameRecord]) -> Result<Option<Figure>> {
+pub fn plot_alpha(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+) -> Result<Option<Figure>> {
     let has = records
         .iter()
         .any(|r| r.alpha_hat.is_some() || !r.alpha_probs.is_empty());
     if !has {
         return Ok(None);
     }
-    let hat = Series {
-        label: String::new(),
-        colour: RGBColor(30, 30, 30),
-        points: records
-            .iter()
+    let alpha_hat = |rs: &[FrameRecord]| -> Vec<(f64, f64)> {
+        rs.iter()
             .filter_map(|r| r.alpha_hat.map(|a| (fx(r), a.index() as f64)))
-            .collect(),
+            .collect()
     };
+    let hat = hat_series(alpha_hat(records), smoothed.map(alpha_hat));
     let mut probs = Vec::new();
     for (status, colour) in TrackerStatus::ALL.iter().zip([LOCKED, PARTIAL, LOST]) {
         let mut points = Vec::new();
@@ -368,17 +415,20 @@ pub fn plot_alpha(records: &[FrameRecord]) -> Result<Option<Figure>> {
             colour: rgb(colour),
             points,
         });
+        if let Some(smoothed) = smoothed {
+            probs.push(probability_series(
+                smoothed,
+                |r| r.alpha_probs.get(status.index()).copied(),
+                format!("P({}) smoothed", status.name()),
+                rgb(colour),
+                "a status probability",
+            )?);
+        }
     }
     let names = TrackerStatus::ALL.map(TrackerStatus::name);
     let svg = render(
         &[
-            (
-                "tracker status α̂",
-                "α̂",
-                (-0.5, 2.5),
-                Some(&names),
-                vec![hat],
-            ),
+            ("tracker status α̂", "α̂", (-0.5, 2.5), Some(&names), hat),
             (
                 "status probabilities",
                 "probability",
@@ -396,16 +446,67 @@ pub fn plot_alpha(records: &[FrameRecord]) -> Result<Option<Figure>> {
     }))
 }
 
-/// Every figure the records have data for, in the order β̂, λ̂, γ̂, α̂, ESS.
+/// Every figure the records have data for, in the order β̂, λ̂, γ̂, α̂, ESS; with `smoothed`
+/// records (`track run --smooth`), each figure draws the smoothed curves beside the filtered ones.
 ///
 /// # Errors
 /// As [`plot_beta`].
-pub fn all_figures(records: &[FrameRecord]) -> Result<Vec<Figure>> {
+pub fn all_figures(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+) -> Result<Vec<Figure>> {
     let mut out = Vec::new();
     for f in [plot_beta, plot_lambda, plot_gamma, plot_alpha, plot_ess] {
-        out.extend(f(records)?);
+        out.extend(f(records, smoothed)?);
     }
     Ok(out)
+}
+
+/// The colour of smoothed curves.
+const SMOOTHED: RGBColor = RGBColor(230, 120, 20);
+
+/// The estimated class over time: one black line, or "filtered" and "smoothed" lines.
+fn hat_series(filtered: Vec<(f64, f64)>, smoothed: Option<Vec<(f64, f64)>>) -> Vec<Series> {
+    let mut out = vec![Series {
+        label: if smoothed.is_some() {
+            "filtered".into()
+        } else {
+            String::new()
+        },
+        colour: RGBColor(30, 30, 30),
+        points: filtered,
+    }];
+    if let Some(points) = smoothed {
+        out.push(Series {
+            label: "smoothed".into(),
+            colour: SMOOTHED,
+            points,
+        });
+    }
+    out
+}
+
+/// A probability per frame of the smoothed records, drawn in a lighter shade of `colour`.
+fn probability_series(
+    records: &[FrameRecord],
+    get: impl Fn(&FrameRecord) -> Option<f64>,
+    label: String,
+    colour: RGBColor,
+    what: &str,
+) -> Result<Series> {
+    let mut points = Vec::new();
+    for r in records {
+        if let Some(p) = get(r) {
+            points.push((fx(r), finite(p, r.frame, what)?));
+        }
+    }
+    let RGBColor(r, g, b) = colour;
+    let light = |c: u8| c + (255 - c) / 2;
+    Ok(Series {
+        label,
+        colour: RGBColor(light(r), light(g), light(b)),
+        points,
+    })
 }
 
 /// Writes each figure as `DIR/NAME.svg` atomically; returns the paths written.
@@ -452,7 +553,7 @@ mod tests {
 
     #[test]
     fn every_figure_for_a_switching_tracker() {
-        let figs = all_figures(&records(true)).unwrap();
+        let figs = all_figures(&records(true), None).unwrap();
         let names: Vec<&str> = figs.iter().map(|f| f.name).collect();
         assert_eq!(names, ["beta", "lambda", "gamma", "alpha", "ess"]);
         for f in &figs {
@@ -470,25 +571,39 @@ mod tests {
     }
 
     #[test]
+    fn smoothed_curves_are_drawn_beside_the_filtered_ones() {
+        let filtered = records(true);
+        let smoothed = records(true);
+        let figs = all_figures(&filtered, Some(&smoothed)).unwrap();
+        assert_eq!(figs.len(), 5);
+        for f in &figs {
+            assert!(f.svg.contains("smoothed"), "{}", f.name);
+            assert!(f.svg.contains("filtered"), "{}", f.name);
+        }
+        let plain = all_figures(&filtered, None).unwrap();
+        assert!(plain.iter().all(|f| !f.svg.contains("smoothed")));
+    }
+
+    #[test]
     fn absent_quantities_have_no_figure() {
-        let figs = all_figures(&records(false)).unwrap();
+        let figs = all_figures(&records(false), None).unwrap();
         assert_eq!(figs.len(), 1);
         assert_eq!(figs[0].name, "ess");
-        assert!(all_figures(&[]).unwrap().is_empty());
+        assert!(all_figures(&[], None).unwrap().is_empty());
     }
 
     #[test]
     fn nan_is_reported_with_its_frame() {
         let mut rs = records(true);
         rs[7].lambda_hat = Some(f64::NAN);
-        let msg = plot_lambda(&rs).unwrap_err().to_string();
+        let msg = plot_lambda(&rs, None).unwrap_err().to_string();
         assert!(msg.contains("frame 8"), "{msg}");
     }
 
     #[test]
     fn figures_are_written_atomically() {
         let dir = tempfile::tempdir().unwrap();
-        let figs = all_figures(&records(true)).unwrap();
+        let figs = all_figures(&records(true), None).unwrap();
         let paths = write_figures(dir.path(), &figs).unwrap();
         assert_eq!(paths.len(), 5);
         assert_eq!(std::fs::read_to_string(&paths[4]).unwrap(), figs[4].svg);

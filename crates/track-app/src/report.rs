@@ -230,7 +230,7 @@ mod tests {
             title: "track demo".into(),
             subtitle: "cargo run -p track-app -- demo".into(),
             metrics: summary_rows(&summary),
-            figures: all_figures(&records).unwrap(),
+            figures: all_figures(&records, None).unwrap(),
             strip: vec![
                 ("frame 1".into(), RgbImage::new(400, 300)),
                 ("frame 10".into(), RgbImage::new(40, 30)),

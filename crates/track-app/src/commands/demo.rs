@@ -98,7 +98,7 @@ pub fn run(args: &Args) -> Result<()> {
             .collect::<String>()
             .as_bytes(),
     )?;
-    let figures = all_figures(records)?;
+    let figures = all_figures(records, None)?;
     for p in write_figures(&args.out.join("plots"), &figures)? {
         if let Ok(rel) = p.strip_prefix(&args.out) {
             written.push(rel.display().to_string());

@@ -595,7 +595,7 @@ pub fn run(args: &Args) -> Result<()> {
         written.push("track.gif".into());
     }
     let figures = if args.plots || args.report {
-        all_figures(&records)?
+        all_figures(&records, smoothed.as_deref())?
     } else {
         Vec::new()
     };
