@@ -9,11 +9,6 @@
 use crate::particle::Particle;
 use crate::space::{STATE_SLOTS, ShapeSpace, StateVector};
 
-/// Number of clusters Odobez uses for `n` particles: max(20, n/10), at most n.
-pub fn odobez_cluster_count(n: usize) -> usize {
-    (n / 10).max(20).min(n)
-}
-
 /// Reusable buffers of [`cluster_particles`].
 #[derive(Debug, Clone, Default)]
 pub struct Clustering {
@@ -115,7 +110,6 @@ mod tests {
             .collect();
         let mut c = Clustering::default();
         cluster_particles(ShapeSpace::Odobez, &mut ps, 20, 3, &mut c);
-        assert_eq!(odobez_cluster_count(100), 20);
         assert_eq!(c.sizes.iter().sum::<usize>(), 100);
         for p in &ps {
             let m = c.means[p.cluster as usize];

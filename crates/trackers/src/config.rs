@@ -145,7 +145,7 @@ pub struct TrackerConfig {
     /// noise (default 0.5).
     #[serde(default = "default_init_spread")]
     pub init_spread: f64,
-    /// The reacquisition jump after an occlusion (see [`crate::reacquire`]); `None`: off. On in
+    /// The reacquisition jump after an occlusion (see [`ReacquisitionSettings`](crate::ReacquisitionSettings)); `None`: off. On in
     /// w-occ, w-eval and full. Measured (sweep, 120 frames, 200 particles, seeds 1–4; mean IoU over the
     /// frames after the full occlusion of the `occlusion` scene): w-eval 0 → 0.81 (4 of 4 tracks
     /// found again), full 0 → 0.50 (2 of 4 found, 1 half); `mclutter` and `distractor` unchanged

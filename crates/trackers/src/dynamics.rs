@@ -105,7 +105,7 @@ pub struct DynamicsSettings {
     /// r, the pull of the size and shape components towards the target's remembered shape per
     /// frame (default 0: the papers' constant-acceleration model; no preset uses it). With r > 0
     /// the prediction of a size or shape component j is x_j + ρ (x_j − x'_j) + r (x̄_j − x_j),
-    /// x̄ the shape anchor of [`TrackerDynamics::shape_anchor`] — Blake & Isard's second-order
+    /// x̄ the shape anchor of `TrackerDynamics::shape_anchor` — Blake & Isard's second-order
     /// shape-space model with a mean shape, the mean being the shape the tracker remembers over
     /// its locked estimates (`reacquire::TrackMemory`, gain 0.05; the initial shape when
     /// reacquisition is off). Without an anchor the prediction is unchanged. Measured for w-eval

@@ -52,34 +52,37 @@
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
-pub mod cluster;
-pub mod config;
-pub mod dynamics;
-pub mod error;
-pub mod frame;
-pub mod observation;
-pub mod particle;
-pub mod proposal;
-pub mod reacquire;
+mod cluster;
+mod config;
+mod dynamics;
+mod error;
+mod frame;
+mod observation;
+mod particle;
+mod proposal;
+mod reacquire;
 pub mod region;
 pub mod smoothing;
-pub mod space;
-pub mod tracker;
-pub mod visibility;
+mod space;
+mod tracker;
+mod visibility;
 pub mod working_scale;
 
 pub use config::{
-    ClutterMode, MotionSettings, OcclusionMode, PoseEstimator, Preset, ProposalKind, TrackerConfig,
+    CLUTTER_LINE_FRACTION, ClutterMode, MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings,
+    OCCLUSION_ARC, OcclusionMode, PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION,
+    TrackerConfig, UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA,
 };
 pub use dynamics::{DynamicsSettings, NoiseKind};
 pub use error::{Error, Result};
 pub use frame::Frame;
 pub use observation::{ImplicitMotionSettings, LikelihoodSettings};
 pub use particle::Particle;
+pub use reacquire::ReacquisitionSettings;
 pub use region::{RegionSettings, RegionTracker};
 pub use smc_core::smooth::SmootherSettings;
-pub use smoothing::{ChainCounts, PriorTransition, SmoothedRun, SwitchingStatistics};
-pub use space::ShapeSpace;
+pub use smoothing::{ChainCounts, SmoothedRun, SwitchingStatistics};
+pub use space::{STATE_SLOTS, ShapeSpace, StateVector};
 pub use tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, build};
 pub use working_scale::{ScaledTracker, WorkingScale};
 

@@ -85,7 +85,7 @@ pub struct LikelihoodSettings {
     /// Weigh the pose by Wu's likelihood as a ratio against the no-target explanation of the
     /// same lines, at the edge density of the lines of the last estimate, and learn λ from
     /// those lines (default false: Wu Eq. 6 / 11 as printed; no preset uses it). See
-    /// `LikelihoodModel::log_ratio_line` and [`ReferenceLines`]. Measured (sweep, 200
+    /// `LikelihoodModel::log_ratio_line` and `ReferenceLines`. Measured (sweep, 200
     /// particles, seeds 1–4): on the `occlusion` scene it keeps the contour on a target sliding
     /// behind the occluder for longer (mean IoU over frames 36–54, target 90 % → 1 % visible:
     /// w-eval 0.65 → 0.78 and w-occ 0.49 → 0.78 with shape noise 0.001 and σ_T = 1), but no
@@ -107,7 +107,7 @@ pub struct LikelihoodSettings {
     /// With [`LikelihoodSettings::occlusion_arc`]: score every hidden line by the same
     /// constant c = e^{E[ln N(m; μ)]}/W, the typical value of Eq. 12 on a background line (minus
     /// the Poisson law's entropy), μ at the edge density of the lines of the last estimate
-    /// ([`ReferenceLines`]), the same for every particle — instead of Eq. 12 at the line's own
+    /// (`ReferenceLines`), the same for every particle — instead of Eq. 12 at the line's own
     /// edge count (default false). A hidden line then says nothing about where the hidden target
     /// is: with Eq. 12 at the observed count, a hypothesis hidden behind the edge-rich occluder
     /// is improbable for that reason alone and the hidden hypotheses flee to plain ground and
@@ -395,11 +395,6 @@ impl LikelihoodModel {
         visible + value
     }
 
-    /// Whether the pose is weighed by the ratio form ([`LikelihoodSettings::likelihood_ratio`]).
-    pub fn uses_ratio(&self) -> bool {
-        self.likelihood_ratio
-    }
-
     /// The edge counts and observed lengths of the lines of state `x` on `image` into `out`
     /// (cleared first; left empty without the ratio form): the reference lines of
     /// [`FrameObservation::reference`].
@@ -435,21 +430,6 @@ impl LikelihoodModel {
         // does not make every stray edge decisive.
         out.density = (length > 0.0).then(|| (count as f64 / length).max(1e-3));
         Ok(())
-    }
-
-    /// Whether a term needs motion estimates.
-    pub fn needs_motion(&self) -> bool {
-        self.motion_consistency
-    }
-
-    /// Whether a term needs the previous frame.
-    pub fn needs_previous_frame(&self) -> bool {
-        self.implicit.is_some()
-    }
-
-    /// Whether Wu's clutter term is used.
-    pub fn has_clutter_term(&self) -> bool {
-        self.clutter.is_some()
     }
 }
 

@@ -7,7 +7,7 @@
 //! summarises each frame exactly as the filter does (pose, β̂ and its class probabilities, λ̂,
 //! γ̂, α̂ and its probabilities).
 //!
-//! The transition density is the tracker's prior ([`PriorTransition`]), evaluated for any pair
+//! The transition density is the tracker's prior (`PriorTransition`), evaluated for any pair
 //! of particles whatever proposal drew them:
 //! - the kinematics: the AR2 prediction from the earlier particle's current and previous states,
 //!   with its Gaussian or Cauchy noise, as the density of the later particle's current state. The
@@ -23,7 +23,7 @@
 //! depend on the pose, so each is a Markov chain whose filtered marginals the tracker already
 //! has (β's class probabilities, α's status probabilities, γ's histogram over
 //! [`GAMMA_BINS`] bins of [0, 1] for the random walk), and the exact backward recursion of
-//! [`dbn_switch::MarkovChain::smooth_filtered`] smooths them ([`smooth_hidden`]). Through the
+//! [`dbn_switch::MarkovChain::smooth_filtered`] smooths them (`smooth_hidden`). Through the
 //! joint kernel instead, the peaked kinematic density decides which particles carry weight
 //! (smoothed ESS of 1–5 on the `occlusion` scene), and the hidden variables are whatever those
 //! few near-ancestral lines happen to carry (docs/RESULTS.md).
@@ -82,7 +82,7 @@ fn class_sums<'a>(
 ///
 /// # Errors
 /// A filtered marginal the chain cannot have produced.
-pub fn smooth_hidden(
+pub(crate) fn smooth_hidden(
     dynamics: &TrackerDynamics,
     history: &History<Particle>,
 ) -> Result<(Vec<SmoothedHidden>, SwitchingStatistics)> {
@@ -333,13 +333,13 @@ impl SwitchingStatistics {
 
 /// A tracker's prior as the smoothers' transition density (see the module docs).
 #[derive(Debug, Clone)]
-pub struct PriorTransition {
+pub(crate) struct PriorTransition {
     dynamics: TrackerDynamics,
 }
 
 impl PriorTransition {
     /// The prior of `dynamics`, without the run-time reacquisition jump and shape anchor.
-    pub fn new(dynamics: &TrackerDynamics) -> Self {
+    pub(crate) fn new(dynamics: &TrackerDynamics) -> Self {
         let mut dynamics = dynamics.clone();
         dynamics.reacquisition = None;
         dynamics.shape_anchor = None;

@@ -49,11 +49,6 @@ impl ColourBins {
         self.hs * self.hs + self.value
     }
 
-    /// Whether there are no bins (never, for validated settings).
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// The bin of an RGB pixel (components 0–255).
     pub fn of_rgb(&self, r: f32, g: f32, b: f32) -> u16 {
         let max = r.max(g).max(b);
@@ -125,11 +120,6 @@ impl Histogram {
             *c /= total;
         }
         Some(Self { mass: counts })
-    }
-
-    /// The bin probabilities.
-    pub fn mass(&self) -> &[f64] {
-        &self.mass
     }
 
     /// Moves this histogram towards `other` by `rate` (exponential forgetting).

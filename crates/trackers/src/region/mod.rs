@@ -17,21 +17,21 @@
 //!   perimeter gradient), in units of the window's mean gradient.
 //!
 //! The filter tracks the region the colours support, found once at the first frame by scaling
-//! the annotation ([`calibration`]), and reports every estimate mapped back to the annotation's
+//! the annotation (`calibration`), and reports every estimate mapped back to the annotation's
 //! convention. Every frame is read in a window around the target at the scale that maps the target to a
 //! fixed working size ([`RegionSettings::working_size`]), so the cost does not depend on the
 //! target's or the frame's size in pixels. The product is tempered so that the effective sample
 //! size never falls below a set fraction of N. A two-state chain on the estimate's colour
-//! similarity ([`status`]) says whether the target is still held. Every frame a share of the
+//! similarity (`status`) says whether the target is still held. Every frame a share of the
 //! particles is drawn around the centre of best colour contrast found by a dense search of the
 //! window; while P(lost) is high that share grows and the window is the whole frame.
 
-pub mod calibration;
-pub mod colour;
-pub mod settings;
-pub mod status;
-pub mod tracker;
-pub mod window;
+mod calibration;
+mod colour;
+mod settings;
+pub(crate) mod status;
+mod tracker;
+mod window;
 
 pub use settings::RegionSettings;
 pub use tracker::RegionTracker;
