@@ -31,15 +31,6 @@ pub struct Scene {
     states: Vec<FrameState>,
 }
 
-/// A whole sequence in memory.
-#[derive(Debug, Clone)]
-pub struct Sequence {
-    /// The frames, 8-bit grey.
-    pub frames: Vec<GrayImage>,
-    /// Their ground truth.
-    pub truth: Vec<FrameTruth>,
-}
-
 impl Scene {
     /// Builds the scene: validates the parameters, calibrates the background clutter, draws the
     /// textures and the trajectory. Deterministic in (params, seed).
@@ -255,21 +246,6 @@ impl Scene {
             got: 0,
         })?;
         Ok((img, truth))
-    }
-
-    /// Renders every frame.
-    ///
-    /// # Errors
-    /// As [`Scene::render_frame`].
-    pub fn render_all(&self) -> Result<Sequence> {
-        let mut frames = Vec::with_capacity(self.len());
-        let mut truth = Vec::with_capacity(self.len());
-        for k in 0..self.len() {
-            let (img, t) = self.render_frame(k)?;
-            frames.push(img);
-            truth.push(t);
-        }
-        Ok(Sequence { frames, truth })
     }
 
     fn paint_background(&self, st: &FrameState, buf: &mut [f32]) {
