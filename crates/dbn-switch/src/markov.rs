@@ -74,12 +74,6 @@ impl MarkovChain {
         }
     }
 
-    /// The rows as nested vectors (for configurations and display).
-    #[must_use]
-    pub fn to_rows(&self) -> Vec<Vec<f64>> {
-        self.probs.chunks(self.n).map(<[f64]>::to_vec).collect()
-    }
-
     /// Draws the next state from `previous`.
     ///
     /// A label outside `0..n` carries no information about the next state, so the next one is

@@ -87,23 +87,7 @@ impl Background {
             // Enough structures to saturate the region: one per 4 px² at scale 1.
             let area = ((x1 - x0) * height) as f64;
             let n_max = (area / (4.0 * scale * scale)).ceil() as usize + 8;
-            // Centres follow the R2 low-discrepancy sequence from a random start, so that every
-            // prefix of the list (every count tried by the calibration) is spread evenly over
-            // the region: the density is then uniform within the region, not only on average.
-            let start = [rng.random::<f64>(), rng.random::<f64>()];
-            let shapes: Vec<(Shape, f32)> = (0..n_max)
-                .map(|i| {
-                    let u = r2_point(start, i);
-                    let pos = [
-                        rect[0] + u[0] * (rect[2] - rect[0]),
-                        rect[1] + u[1] * (rect[3] - rect[1]),
-                    ];
-                    let s = Shape::random(&mut rng, pos, scale);
-                    let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
-                    let g = params.grey + sign * rng.random_range(c.contrast[0]..=c.contrast[1]);
-                    (s, g.clamp(0.0, 255.0) as f32)
-                })
-                .collect();
+            let shapes = region_structures(&mut rng, params, rect, scale, n_max);
             let margin = (det.radius() + 2) as f64;
             let segments = random_segments(
                 &mut rng,
@@ -116,7 +100,7 @@ impl Background {
             // Painting is sequential, so growing the count only paints the new structures on
             // top; shrinking it repaints the region from the base.
             let mut painted = 0usize;
-            let mut measure = |n: usize, data: &mut Vec<f32>| -> f64 {
+            let mut measure = |n: usize| -> f64 {
                 if n < painted {
                     for y in 0..height {
                         let row = y * width;
@@ -125,79 +109,21 @@ impl Background {
                     painted = 0;
                 }
                 for (s, g) in &shapes[painted..n] {
-                    s.paint(data, width, clip, *g);
+                    s.paint(&mut data, width, clip, *g);
                 }
                 painted = n;
                 edge_density(
                     &GrayView {
                         width,
                         height,
-                        data,
+                        data: &data,
                     },
                     &segments,
                     &det,
                 )
             };
-            let tol = CALIBRATION_TOLERANCE * requested;
-            // λ(n) grows with n until the structures cover each other. Bracket the requested
-            // density by growing n geometrically from a pilot count, then close in by false
-            // position (λ is close to linear in n) with bisection as a safeguard.
-            let mut lo = (0usize, measure(0, &mut data));
-            let mut best = lo;
-            let mut hi = None;
-            if lo.1 < requested - tol {
-                let mut n = (n_max / 64).max(1);
-                loop {
-                    let l = measure(n, &mut data);
-                    if (l - requested).abs() < (best.1 - requested).abs() {
-                        best = (n, l);
-                    }
-                    if l >= requested {
-                        hi = Some((n, l));
-                        break;
-                    }
-                    lo = (n, l);
-                    if n == n_max {
-                        return Err(Error::Calibration {
-                            class: class.index(),
-                            requested,
-                            reached: l,
-                        });
-                    }
-                    let grow = if l > 0.0 {
-                        (1.2 * requested / l).clamp(1.3, 4.0)
-                    } else {
-                        4.0
-                    };
-                    n = ((n as f64 * grow).ceil() as usize).min(n_max);
-                }
-            }
-            let mut stalled = 0u32;
-            while let Some(h) = hi {
-                if h.0 - lo.0 <= 1 || (best.1 - requested).abs() <= tol {
-                    break;
-                }
-                let frac = (requested - lo.1) / (h.1 - lo.1).max(1e-12);
-                let mut mid = lo.0 + (frac * (h.0 - lo.0) as f64).round() as usize;
-                if stalled >= 2 {
-                    mid = (lo.0 + h.0) / 2;
-                    stalled = 0;
-                }
-                let mid = mid.clamp(lo.0 + 1, h.0 - 1);
-                let l = measure(mid, &mut data);
-                if (l - requested).abs() < (best.1 - requested).abs() {
-                    best = (mid, l);
-                }
-                if l < requested {
-                    lo = (mid, l);
-                    stalled += 1;
-                } else {
-                    hi = Some((mid, l));
-                    stalled = 0;
-                }
-            }
-            let (n, _) = best;
-            let measured = measure(n, &mut data);
+            let n = calibrated_count(&mut measure, requested, n_max, class.index())?;
+            let measured = measure(n);
             regions.push(Region {
                 x0,
                 x1,
@@ -235,4 +161,107 @@ impl Background {
             data: &self.data,
         }
     }
+}
+
+/// The `n_max` structures that may be painted in the region `rect` (x0, y0, x1, y1), in the
+/// order calibration paints them, each with its grey level.
+///
+/// Centres follow the R2 low-discrepancy sequence from a random start, so that every prefix of
+/// the list (every count tried by the calibration) is spread evenly over the region: the density
+/// is then uniform within the region, not only on average.
+fn region_structures(
+    rng: &mut Pcg64Mcg,
+    params: &BackgroundParams,
+    rect: [f64; 4],
+    scale: f64,
+    n_max: usize,
+) -> Vec<(Shape, f32)> {
+    let c = &params.clutter;
+    let start = [rng.random::<f64>(), rng.random::<f64>()];
+    (0..n_max)
+        .map(|i| {
+            let u = r2_point(start, i);
+            let pos = [
+                rect[0] + u[0] * (rect[2] - rect[0]),
+                rect[1] + u[1] * (rect[3] - rect[1]),
+            ];
+            let s = Shape::random(rng, pos, scale);
+            let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
+            let g = params.grey + sign * rng.random_range(c.contrast[0]..=c.contrast[1]);
+            (s, g.clamp(0.0, 255.0) as f32)
+        })
+        .collect()
+}
+
+/// The number of structures, at most `n_max`, whose measured edge density `measure(n)` comes
+/// closest to `requested` (within [`CALIBRATION_TOLERANCE`] it stops early).
+///
+/// λ(n) grows with n until the structures cover each other. The requested density is bracketed
+/// by growing n geometrically from a pilot count, then closed in by false position (λ is close
+/// to linear in n), with bisection as a safeguard when one end stalls.
+///
+/// # Errors
+/// [`Error::Calibration`] when even `n_max` structures stay below the requested density.
+fn calibrated_count(
+    measure: &mut impl FnMut(usize) -> f64,
+    requested: f64,
+    n_max: usize,
+    class: u8,
+) -> Result<usize> {
+    let tol = CALIBRATION_TOLERANCE * requested;
+    let mut lo = (0usize, measure(0));
+    let mut best = lo;
+    let mut hi = None;
+    if lo.1 < requested - tol {
+        let mut n = (n_max / 64).max(1);
+        loop {
+            let l = measure(n);
+            if (l - requested).abs() < (best.1 - requested).abs() {
+                best = (n, l);
+            }
+            if l >= requested {
+                hi = Some((n, l));
+                break;
+            }
+            lo = (n, l);
+            if n == n_max {
+                return Err(Error::Calibration {
+                    class,
+                    requested,
+                    reached: l,
+                });
+            }
+            let grow = if l > 0.0 {
+                (1.2 * requested / l).clamp(1.3, 4.0)
+            } else {
+                4.0
+            };
+            n = ((n as f64 * grow).ceil() as usize).min(n_max);
+        }
+    }
+    let mut stalled = 0u32;
+    while let Some(h) = hi {
+        if h.0 - lo.0 <= 1 || (best.1 - requested).abs() <= tol {
+            break;
+        }
+        let frac = (requested - lo.1) / (h.1 - lo.1).max(1e-12);
+        let mut mid = lo.0 + (frac * (h.0 - lo.0) as f64).round() as usize;
+        if stalled >= 2 {
+            mid = (lo.0 + h.0) / 2;
+            stalled = 0;
+        }
+        let mid = mid.clamp(lo.0 + 1, h.0 - 1);
+        let l = measure(mid);
+        if (l - requested).abs() < (best.1 - requested).abs() {
+            best = (mid, l);
+        }
+        if l < requested {
+            lo = (mid, l);
+            stalled += 1;
+        } else {
+            hi = Some((mid, l));
+            stalled = 0;
+        }
+    }
+    Ok(best.0)
 }

@@ -52,6 +52,6 @@ pub use params::{
     JumpParams, MotionParams, OccluderParams, ScaleChangeParams, Scenario, ScenarioParams,
     StatusThresholds, TargetParams,
 };
-pub use render::{Scene, Sequence, to_f32};
+pub use render::{Scene, to_f32};
 pub use truth::{FrameTruth, Status};
 pub use writer::write_sequence;

@@ -494,30 +494,6 @@ impl ScenarioParams {
     /// # Errors
     /// [`Error::InvalidParameter`] naming the first offending field.
     pub fn validate(&self) -> Result<()> {
-        fn bad(name: &'static str, reason: impl Into<String>) -> Error {
-            Error::InvalidParameter {
-                name,
-                reason: reason.into(),
-            }
-        }
-        fn finite(name: &'static str, vals: &[f64]) -> Result<()> {
-            if vals.iter().all(|v| v.is_finite()) {
-                Ok(())
-            } else {
-                Err(bad(name, "not finite"))
-            }
-        }
-        fn range(name: &'static str, r: [f64; 2], lo: f64, hi: f64) -> Result<()> {
-            finite(name, &r)?;
-            if r[0] >= lo && r[1] <= hi && r[0] <= r[1] {
-                Ok(())
-            } else {
-                Err(bad(
-                    name,
-                    format!("expected {lo} ≤ min ≤ max ≤ {hi}, got {r:?}"),
-                ))
-            }
-        }
         if self.width < 32 || self.height < 32 || self.width > 8192 || self.height > 8192 {
             return Err(bad(
                 "width/height",
@@ -531,7 +507,61 @@ impl ScenarioParams {
         if self.noise_sigma < 0.0 {
             return Err(bad("noise_sigma", "negative"));
         }
-        let bg = &self.background;
+        self.background.check()?;
+        self.target.check(f64::from(self.width.min(self.height)))?;
+        self.motion.check()?;
+        if let Some(o) = &self.occluder {
+            o.check()?;
+        }
+        if let Some(d) = &self.distractor {
+            d.check()?;
+        }
+        if let Some(cam) = &self.camera {
+            cam.check()?;
+        }
+        if let Some(s) = &self.scale_changes {
+            s.check()?;
+        }
+        if let Some(h) = &self.head_turn {
+            h.check()?;
+        }
+        self.status.check()
+    }
+}
+
+// Validation of each section, in the order `ScenarioParams::validate` runs them; each names
+// the first offending field with its dotted path.
+
+fn bad(name: &'static str, reason: impl Into<String>) -> Error {
+    Error::InvalidParameter {
+        name,
+        reason: reason.into(),
+    }
+}
+
+fn finite(name: &'static str, vals: &[f64]) -> Result<()> {
+    if vals.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(bad(name, "not finite"))
+    }
+}
+
+fn range(name: &'static str, r: [f64; 2], lo: f64, hi: f64) -> Result<()> {
+    finite(name, &r)?;
+    if r[0] >= lo && r[1] <= hi && r[0] <= r[1] {
+        Ok(())
+    } else {
+        Err(bad(
+            name,
+            format!("expected {lo} ≤ min ≤ max ≤ {hi}, got {r:?}"),
+        ))
+    }
+}
+
+impl BackgroundParams {
+    fn check(&self) -> Result<()> {
+        let bg = self;
         finite(
             "background",
             &[bg.grey, bg.texture_amplitude, bg.texture_scale, bg.extent],
@@ -564,7 +594,14 @@ impl ScenarioParams {
         if c.size_scale.iter().any(|&s| !(0.3..=4.0).contains(&s)) {
             return Err(bad("background.clutter.size_scale", "each in [0.3, 4]"));
         }
-        let t = &self.target;
+        Ok(())
+    }
+}
+
+impl TargetParams {
+    /// `frame_side` is the frame's smaller side, which bounds the semi-axes.
+    fn check(&self, frame_side: f64) -> Result<()> {
+        let t = self;
         finite(
             "target",
             &[
@@ -582,7 +619,7 @@ impl ScenarioParams {
                 t.semi_axes[0].max(t.semi_axes[1]),
             ],
             4.0,
-            0.3 * f64::from(self.width.min(self.height)),
+            0.3 * frame_side,
         )?;
         if !(0.0..=1.0).contains(&t.contrast_min) || t.texture_scale <= 0.05 || t.rim_width < 0.5 {
             return Err(bad(
@@ -594,7 +631,13 @@ impl ScenarioParams {
         if !(0.0..=1.5).contains(&t.stretch_half_width) {
             return Err(bad("target.stretch_half_width", "in [0, 1.5] rad"));
         }
-        let m = &self.motion;
+        Ok(())
+    }
+}
+
+impl MotionParams {
+    fn check(&self) -> Result<()> {
+        let m = self;
         finite("motion", &[m.speed, m.margin])?;
         if !(0.0..=50.0).contains(&m.speed) || m.margin < 0.0 {
             return Err(bad("motion", "speed in [0, 50] px/frame, margin ≥ 0"));
@@ -612,63 +655,92 @@ impl ScenarioParams {
                 ));
             }
         }
-        if let Some(o) = &self.occluder {
-            range(
-                "occluder.centre",
-                [o.centre[0].min(o.centre[1]), o.centre[0].max(o.centre[1])],
-                0.0,
-                1.0,
-            )?;
-            finite(
-                "occluder",
-                &[o.size[0], o.size[1], o.grey, o.texture_amplitude],
-            )?;
-            if o.size[0] < 1.0 || o.size[1] < 1.0 {
-                return Err(bad("occluder.size", "at least 1 px"));
-            }
+        Ok(())
+    }
+}
+
+impl OccluderParams {
+    fn check(&self) -> Result<()> {
+        let o = self;
+        range(
+            "occluder.centre",
+            [o.centre[0].min(o.centre[1]), o.centre[0].max(o.centre[1])],
+            0.0,
+            1.0,
+        )?;
+        finite(
+            "occluder",
+            &[o.size[0], o.size[1], o.grey, o.texture_amplitude],
+        )?;
+        if o.size[0] < 1.0 || o.size[1] < 1.0 {
+            return Err(bad("occluder.size", "at least 1 px"));
         }
-        if let Some(d) = &self.distractor {
-            range("distractor.gap", d.gap, 0.0, 500.0)?;
-            finite("distractor", &[d.angular_speed, d.gap_period, d.grey])?;
-            if d.gap_period <= 0.0 {
-                return Err(bad("distractor.gap_period", "positive"));
-            }
+        Ok(())
+    }
+}
+
+impl DistractorParams {
+    fn check(&self) -> Result<()> {
+        let d = self;
+        range("distractor.gap", d.gap, 0.0, 500.0)?;
+        finite("distractor", &[d.angular_speed, d.gap_period, d.grey])?;
+        if d.gap_period <= 0.0 {
+            return Err(bad("distractor.gap_period", "positive"));
         }
-        if let Some(cam) = &self.camera {
-            finite(
+        Ok(())
+    }
+}
+
+impl CameraParams {
+    fn check(&self) -> Result<()> {
+        let cam = self;
+        finite(
+            "camera",
+            &[
+                cam.pan_amplitude[0],
+                cam.pan_amplitude[1],
+                cam.pan_period,
+                cam.zoom_amplitude,
+                cam.zoom_period,
+            ],
+        )?;
+        if cam.pan_period <= 0.0
+            || cam.zoom_period <= 0.0
+            || !(0.0..0.5).contains(&cam.zoom_amplitude)
+        {
+            return Err(bad(
                 "camera",
-                &[
-                    cam.pan_amplitude[0],
-                    cam.pan_amplitude[1],
-                    cam.pan_period,
-                    cam.zoom_amplitude,
-                    cam.zoom_period,
-                ],
-            )?;
-            if cam.pan_period <= 0.0
-                || cam.zoom_period <= 0.0
-                || !(0.0..0.5).contains(&cam.zoom_amplitude)
-            {
-                return Err(bad(
-                    "camera",
-                    "positive periods, zoom_amplitude in [0, 0.5)",
-                ));
-            }
+                "positive periods, zoom_amplitude in [0, 0.5)",
+            ));
         }
-        if let Some(s) = &self.scale_changes {
-            range("scale_changes.magnitude", s.magnitude, 0.0, 0.9)?;
-            range("scale_changes.bounds", s.bounds, 0.2, 3.0)?;
-            if s.duration == 0 {
-                return Err(bad("scale_changes.duration", "at least one frame"));
-            }
+        Ok(())
+    }
+}
+
+impl ScaleChangeParams {
+    fn check(&self) -> Result<()> {
+        range("scale_changes.magnitude", self.magnitude, 0.0, 0.9)?;
+        range("scale_changes.bounds", self.bounds, 0.2, 3.0)?;
+        if self.duration == 0 {
+            return Err(bad("scale_changes.duration", "at least one frame"));
         }
-        if let Some(h) = &self.head_turn {
-            finite("head_turn.shift", &[h.shift])?;
-            if !(0.0..=1.0).contains(&h.shift.abs()) || h.duration == 0 {
-                return Err(bad("head_turn", "|shift| ≤ 1, duration ≥ 1"));
-            }
+        Ok(())
+    }
+}
+
+impl HeadTurnParams {
+    fn check(&self) -> Result<()> {
+        finite("head_turn.shift", &[self.shift])?;
+        if !(0.0..=1.0).contains(&self.shift.abs()) || self.duration == 0 {
+            return Err(bad("head_turn", "|shift| ≤ 1, duration ≥ 1"));
         }
-        let st = &self.status;
+        Ok(())
+    }
+}
+
+impl StatusThresholds {
+    fn check(&self) -> Result<()> {
+        let st = self;
         finite("status", &[st.locked_min_visible, st.lost_max_visible])?;
         if !(0.0 <= st.lost_max_visible
             && st.lost_max_visible < st.locked_min_visible

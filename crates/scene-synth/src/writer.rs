@@ -6,9 +6,12 @@
 //! DIR/groundtruth.csv        everything in FrameTruth, one row per frame
 //! DIR/scene.json             every parameter, the seed, and the calibrated clutter densities
 //! ```
+//!
+//! Every file is written atomically: to a temporary file in its own folder, renamed into place
+//! once complete, so an interrupted run leaves complete files only.
 
 use std::fs;
-use std::io::Write;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
@@ -64,17 +67,14 @@ pub fn write_sequence(dir: &Path, scene: &Scene) -> Result<usize> {
     for k in 0..scene.len() {
         let truth = scene.render_frame_into(k, &mut out, &mut scratch)?;
         let path: PathBuf = img_dir.join(format!("{:04}.png", k + 1));
-        image::save_buffer_with_format(
-            &path,
-            &out,
-            w as u32,
-            h as u32,
-            image::ExtendedColorType::L8,
-            image::ImageFormat::Png,
-        )
-        .map_err(|source| Error::Image {
-            path: path.clone(),
-            source,
+        write_atomic(&path, |file| {
+            use image::ImageEncoder;
+            image::codecs::png::PngEncoder::new(file)
+                .write_image(&out, w as u32, h as u32, image::ExtendedColorType::L8)
+                .map_err(|source| Error::Image {
+                    path: path.clone(),
+                    source,
+                })
         })?;
         rect.push_str(&truth.rect_line());
         rect.push('\n');
@@ -112,8 +112,41 @@ pub fn write_sequence(dir: &Path, scene: &Scene) -> Result<usize> {
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
-    let mut f = fs::File::create(path).map_err(io_err(path))?;
-    f.write_all(bytes).map_err(io_err(path))
+    write_atomic(path, |file| file.write_all(bytes).map_err(io_err(path)))
+}
+
+/// Writes `path` through `fill` into a temporary sibling, then syncs it and renames it over
+/// `path`.
+///
+/// The temporary file lives in the destination's own folder because a rename is atomic only
+/// within one file system. `tempfile` deletes it when it is dropped before `persist`, so an
+/// error at any step, in `fill` or after, leaves no partial file behind.
+fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let tmp = tempfile::Builder::new()
+        .prefix(".scene-synth-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(io_err(path))?;
+    let mut writer = BufWriter::with_capacity(1 << 16, tmp);
+    fill(&mut writer)?;
+    let tmp = writer
+        .into_inner()
+        .map_err(|e| io_err(path)(e.into_error()))?;
+    // Temporary files are created readable by their owner only; the sequence is ordinary data.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(fs::Permissions::from_mode(0o644))
+            .map_err(io_err(path))?;
+    }
+    tmp.as_file().sync_all().map_err(io_err(path))?;
+    tmp.persist(path).map_err(|e| io_err(path)(e.error))?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -160,6 +193,63 @@ mod tests {
             assert!(fa == fb, "{sc}: same seed, different bytes");
             assert!(fa != fc, "{sc}: different seeds, same bytes");
         }
+    }
+
+    #[test]
+    fn files_are_complete_and_no_temporary_file_remains() {
+        let mut p = ScenarioParams::preset(Scenario::Zoom);
+        p.frames = 3;
+        let scene = Scene::new(&p, 5).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        // Earlier, longer outputs are replaced whole, not overwritten in place.
+        fs::write(dir.path().join("scene.json"), " ".repeat(1 << 16)).unwrap();
+        write_sequence(dir.path(), &scene).unwrap();
+        let written = files(dir.path());
+        let names: Vec<_> = written.iter().map(|(p, _)| p.clone()).collect();
+        let expected: Vec<PathBuf> = [
+            "groundtruth.csv",
+            "groundtruth_rect.txt",
+            "img/0001.png",
+            "img/0002.png",
+            "img/0003.png",
+            "scene.json",
+        ]
+        .iter()
+        .map(PathBuf::from)
+        .collect();
+        assert_eq!(names, expected);
+        for (name, bytes) in &written {
+            if name.extension().is_some_and(|e| e == "png") {
+                // A PNG stream ends with its IEND chunk: the file is complete.
+                assert!(bytes.ends_with(b"IEND\xaeB`\x82"), "{}", name.display());
+            }
+        }
+        let json: serde_json::Value =
+            serde_json::from_slice(&fs::read(dir.path().join("scene.json")).unwrap()).unwrap();
+        assert_eq!(json["seed"], 5);
+    }
+
+    #[test]
+    fn a_failed_write_leaves_no_temporary_file() {
+        let mut p = ScenarioParams::preset(Scenario::Zoom);
+        p.frames = 2;
+        let scene = Scene::new(&p, 5).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        // A folder where the second frame should go: its rename fails.
+        fs::create_dir_all(dir.path().join("img/0002.png")).unwrap();
+        assert!(matches!(
+            write_sequence(dir.path(), &scene),
+            Err(Error::Io { .. })
+        ));
+        let mut img: Vec<_> = fs::read_dir(dir.path().join("img"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        img.sort();
+        assert_eq!(img, ["0001.png", "0002.png"]);
+        assert!(dir.path().join("img/0002.png").is_dir());
+        // Nothing was written after the failure.
+        assert!(!dir.path().join("groundtruth.csv").exists());
     }
 
     #[test]

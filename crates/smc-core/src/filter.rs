@@ -224,12 +224,6 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
         self.history.as_ref()
     }
 
-    /// Mutable access to the recorded history (for instance to clear it, or to push the initial
-    /// set by hand).
-    pub fn history_mut(&mut self) -> Option<&mut History<S>> {
-        self.history.as_mut()
-    }
-
     /// Takes the recorded history, leaving an empty one with the same settings in its place.
     /// `None` unless [`FilterSettings::history`] is set.
     pub fn take_history(&mut self) -> Option<History<S>> {

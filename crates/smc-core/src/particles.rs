@@ -130,12 +130,6 @@ impl<S> ParticleSet<S> {
         argmax(&self.weights).unwrap_or((0, 0.0))
     }
 
-    /// Consumes the set and returns its states.
-    #[must_use]
-    pub fn into_states(self) -> Vec<S> {
-        self.states
-    }
-
     /// Multiplies each weight by exp(`log_increments[i]`) and renormalises (the weight update of
     /// Odobez Eq. 3, with the increment log p(z|x) + log p(x|x′) − log q(x|x′, z) computed by the
     /// caller).
@@ -173,30 +167,6 @@ impl<S> ParticleSet<S> {
         }
         normalize_log_weights(&mut self.log_weights, &mut self.weights)
             .map_err(|reason| Error::DegenerateWeights { step, reason })
-    }
-
-    /// Replaces the log weights by `log_weights` (unnormalised) and normalises them.
-    ///
-    /// Returns their log-sum-exp. The set is unchanged when an error is returned.
-    ///
-    /// # Errors
-    /// As [`ParticleSet::reweight`].
-    pub fn set_log_weights(&mut self, log_weights: &[f64], step: u64) -> Result<f64> {
-        check_len("log_weights", self.len(), log_weights.len())?;
-        checked_max(log_weights).map_err(|reason| Error::DegenerateWeights { step, reason })?;
-        self.log_weights.copy_from_slice(log_weights);
-        normalize_log_weights(&mut self.log_weights, &mut self.weights)
-            .map_err(|reason| Error::DegenerateWeights { step, reason })
-    }
-
-    /// Replaces the states by a new vector of the same length, keeping the weights; returns the
-    /// old states.
-    ///
-    /// # Errors
-    /// [`Error::LengthMismatch`] when the length differs.
-    pub fn replace_states(&mut self, states: Vec<S>) -> Result<Vec<S>> {
-        check_len("states", self.len(), states.len())?;
-        Ok(std::mem::replace(&mut self.states, states))
     }
 
     /// Resets every weight to 1/N.

@@ -1,8 +1,6 @@
 //! Argument parsing and dispatch for the `track` binary.
 
 use std::ffi::OsString;
-use std::io::Write;
-use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
@@ -78,24 +76,4 @@ where
     let cli =
         Cli::try_parse_from(args).map_err(|e| AppError::setting("arguments", e.to_string()))?;
     run(cli)
-}
-
-/// Entry point of the binary: parses, runs, prints one clear error line and maps it to an exit code.
-pub fn main_from_args<I, T>(args: I) -> ExitCode
-where
-    I: IntoIterator<Item = T>,
-    T: Into<OsString> + Clone,
-{
-    let cli = match Cli::try_parse_from(args) {
-        Ok(cli) => cli,
-        // clap prints help, version and usage errors itself, with its own exit codes (0 or 2).
-        Err(e) => e.exit(),
-    };
-    match run(cli) {
-        Ok(()) | Err(AppError::StdoutClosed) => ExitCode::SUCCESS,
-        Err(e) => {
-            let _ = writeln!(std::io::stderr(), "error: {e}");
-            ExitCode::from(e.exit_code())
-        }
-    }
 }

@@ -21,6 +21,5 @@ pub mod render;
 pub mod report;
 pub mod sequence;
 pub mod session;
-pub mod video;
 
 pub use error::{AppError, Result};

@@ -17,7 +17,7 @@ use crate::record::{
 };
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
-use crate::session::{ColourBy, DrawOptions};
+use crate::session::{ColourBy, DrawOptions, SessionOutput};
 use crate::{AppError, Result};
 
 /// Arguments of `track demo`.
@@ -72,32 +72,8 @@ pub fn run(args: &Args) -> Result<()> {
     let output = seq.track(config.clone(), Some(draw))?;
     let records = &output.records;
 
-    let mut written = Vec::new();
-    for (k, img) in output.overlays.iter().enumerate() {
-        let name = format!("overlay/{:04}.png", k + 1);
-        write_png(&args.out.join(&name), img)?;
-        written.push(name);
-    }
-    write_gif(&args.out.join("track.gif"), &output.overlays, 80)?;
-    write_csv_with(
-        &args.out.join("track.csv"),
-        records,
-        CsvColumns::of_tracker(&config),
-    )?;
-    write_atomic(
-        &args.out.join("boxes.txt"),
-        boxes_string(records)?.as_bytes(),
-    )?;
     let truth_boxes: Vec<Option<Box2>> = (0..seq.frames.len()).map(|k| seq.truth_box(k)).collect();
-    write_atomic(
-        &args.out.join("groundtruth_rect.txt"),
-        truth_boxes
-            .iter()
-            .flatten()
-            .map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.w, b.h))
-            .collect::<String>()
-            .as_bytes(),
-    )?;
+    let mut written = write_tracks(args, &config, &output, &truth_boxes)?;
     let figures = all_figures(records, None)?;
     for p in write_figures(&args.out.join("plots"), &figures)? {
         if let Ok(rel) = p.strip_prefix(&args.out) {
@@ -136,31 +112,7 @@ pub fn run(args: &Args) -> Result<()> {
         outputs: written,
         interrupted: None,
     };
-    let strip = strip_indices(output.overlays.len(), STRIP_FRAMES)
-        .into_iter()
-        .filter_map(|k| {
-            output
-                .overlays
-                .get(k)
-                .map(|img| (format!("frame {}", k + 1), thumbnail(img, 200)))
-        })
-        .collect();
-    write_report(
-        &args.out.join("report.html"),
-        &ReportInput {
-            title: format!(
-                "track demo — {} on the synthetic {} scene",
-                config.name, seq.name
-            ),
-            subtitle: format!(
-                "track demo --scenario {} --tracker {} --particles {} --seed {}",
-                seq.name, config.name, config.particles, args.seed
-            ),
-            metrics: summary_rows(&summary),
-            figures,
-            strip,
-        },
-    )?;
+    write_demo_report(args, &config, &seq.name, &output, &summary, figures)?;
     write_summary(&args.out.join("summary.json"), &summary)?;
     if !args.quiet {
         crate::output::print_stdout(&format!(
@@ -178,4 +130,78 @@ pub fn run(args: &Args) -> Result<()> {
         ))?;
     }
     Ok(())
+}
+
+/// Writes the overlays, `track.gif`, `track.csv`, `boxes.txt` and the scene's
+/// `groundtruth_rect.txt`; returns the overlays' names (the other files are listed by the
+/// caller).
+fn write_tracks(
+    args: &Args,
+    config: &trackers::TrackerConfig,
+    output: &SessionOutput,
+    truth_boxes: &[Option<Box2>],
+) -> Result<Vec<String>> {
+    let records = &output.records;
+    let mut written = Vec::new();
+    for (k, img) in output.overlays.iter().enumerate() {
+        let name = format!("overlay/{:04}.png", k + 1);
+        write_png(&args.out.join(&name), img)?;
+        written.push(name);
+    }
+    write_gif(&args.out.join("track.gif"), &output.overlays, 80)?;
+    write_csv_with(
+        &args.out.join("track.csv"),
+        records,
+        CsvColumns::of_tracker(config),
+    )?;
+    write_atomic(
+        &args.out.join("boxes.txt"),
+        boxes_string(records)?.as_bytes(),
+    )?;
+    write_atomic(
+        &args.out.join("groundtruth_rect.txt"),
+        truth_boxes
+            .iter()
+            .flatten()
+            .map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.w, b.h))
+            .collect::<String>()
+            .as_bytes(),
+    )?;
+    Ok(written)
+}
+
+/// Writes `report.html`: the summary's figures, the plots and a strip of overlays.
+fn write_demo_report(
+    args: &Args,
+    config: &trackers::TrackerConfig,
+    scene: &str,
+    output: &SessionOutput,
+    summary: &Summary,
+    figures: Vec<crate::plots::Figure>,
+) -> Result<()> {
+    let strip = strip_indices(output.overlays.len(), STRIP_FRAMES)
+        .into_iter()
+        .filter_map(|k| {
+            output
+                .overlays
+                .get(k)
+                .map(|img| (format!("frame {}", k + 1), thumbnail(img, 200)))
+        })
+        .collect();
+    write_report(
+        &args.out.join("report.html"),
+        &ReportInput {
+            title: format!(
+                "track demo — {} on the synthetic {} scene",
+                config.name, scene
+            ),
+            subtitle: format!(
+                "track demo --scenario {} --tracker {} --particles {} --seed {}",
+                scene, config.name, config.particles, args.seed
+            ),
+            metrics: summary_rows(summary),
+            figures,
+            strip,
+        },
+    )
 }

@@ -32,87 +32,99 @@ pub enum Evaluation {
     /// Odobez's Table 1: success rates of m1, m2, m3 and full over dynamics D1–D4 and particle
     /// counts S1–S2 on a synthetic scene.
     #[command(after_help = "Example:\n  track eval table1 --trials 50 --frames 120 --out results/")]
-    Table1 {
-        /// The synthetic scenario.
-        #[arg(long, value_enum, default_value_t = ScenarioArg::Distractor)]
-        scenario: ScenarioArg,
-        /// Trials (seeds 1..=N) per cell.
-        #[arg(long, default_value_t = 50)]
-        trials: usize,
-        /// Frames of the scene (default: the scenario's length).
-        #[arg(long)]
-        frames: Option<usize>,
-        /// Seed of the scene (the trials' seeds are 1..=trials).
-        #[arg(long, default_value_t = 1)]
-        scene_seed: u64,
-        /// Trackers (repeatable; default m1, m2, m3, full).
-        #[arg(long = "tracker")]
-        trackers: Vec<String>,
-        /// Override a scene parameter, `dotted.path=JSON` (repeatable), e.g.
-        /// `--set target.contrast_min=0.05` (see `cargo xtask gen-clutter --help`).
-        #[arg(long = "set", value_name = "PATH=JSON")]
-        set: Vec<String>,
-        /// Folder for table1.md and table1.csv.
-        #[arg(long, default_value = "track-eval")]
-        out: PathBuf,
-        /// No progress bar.
-        #[arg(long)]
-        quiet: bool,
-    },
+    Table1(Table1Args),
     /// Accuracy of β̂, γ̂ and α̂ against the generator's ground truth on the mclutter and
     /// occlusion scenes.
     #[command(after_help = "Example:\n  track eval switching --out results/")]
-    Switching {
-        /// Trackers (default w-hmm, w-occ, w-eval, full), particles and seed.
-        #[command(flatten)]
-        run: TrackerRuns,
-        /// Frames of each scene (default: the scenario's length).
-        #[arg(long)]
-        frames: Option<usize>,
-        /// Runs per scene and tracker: run k renders the scene with seed 1 + k and tracks it with
-        /// seed SEED + k; the table gives the mean and range.
-        #[arg(long, default_value_t = 1)]
-        seeds: usize,
-        /// Also smooth each run (forward filtering–backward smoothing of the recorded particles)
-        /// and score the smoothed estimates, as rows "TRACKER smoothed".
-        #[arg(long)]
-        smooth: bool,
-        /// A tracker configuration file (JSON or TOML, as `track config` or `track
-        /// learn-switching` write), run beside the presets (repeatable).
-        #[arg(long = "config")]
-        configs: Vec<PathBuf>,
-        /// Folder for switching.md and switching.csv.
-        #[arg(long, default_value = "track-eval")]
-        out: PathBuf,
-    },
+    Switching(SwitchingArgs),
     /// Precision at 20 px, success AUC and frames/s on OTB folders (img/ + groundtruth_rect.txt;
     /// frames labelled 0,0,0,0 are not scored).
     #[command(
         after_help = "Example:\n  track eval otb ../shared/data/real/girl_mil --tracker m1 --tracker full"
     )]
-    Otb {
-        /// OTB folders.
-        #[arg(required = true)]
-        sequences: Vec<PathBuf>,
-        /// Trackers (default head when no --config is given), particles and seed (both also
-        /// override those of a --config file).
-        #[command(flatten)]
-        run: TrackerRuns,
-        /// Edge threshold of the measurement lines, grey levels per pixel (default: the
-        /// preset's, 8); see `track run --help`.
-        #[arg(long)]
-        edge_threshold: Option<f32>,
-        /// A tracker configuration file (JSON or TOML, as `track config PRESET` prints), run
-        /// beside the presets (repeatable).
-        #[arg(long = "config")]
-        configs: Vec<PathBuf>,
-        /// Folder for otb.md and otb.csv.
-        #[arg(long, default_value = "track-eval")]
-        out: PathBuf,
-        /// No progress bar.
-        #[arg(long)]
-        quiet: bool,
-    },
+    Otb(OtbArgs),
+}
+
+/// Arguments of `track eval table1`.
+#[derive(Debug, clap::Args)]
+pub struct Table1Args {
+    /// The synthetic scenario.
+    #[arg(long, value_enum, default_value_t = ScenarioArg::Distractor)]
+    pub scenario: ScenarioArg,
+    /// Trials (seeds 1..=N) per cell.
+    #[arg(long, default_value_t = 50)]
+    pub trials: usize,
+    /// Frames of the scene (default: the scenario's length).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Seed of the scene (the trials' seeds are 1..=trials).
+    #[arg(long, default_value_t = 1)]
+    pub scene_seed: u64,
+    /// Trackers (repeatable; default m1, m2, m3, full).
+    #[arg(long = "tracker")]
+    pub trackers: Vec<String>,
+    /// Override a scene parameter, `dotted.path=JSON` (repeatable), e.g.
+    /// `--set target.contrast_min=0.05` (see `cargo xtask gen-clutter --help`).
+    #[arg(long = "set", value_name = "PATH=JSON")]
+    pub set: Vec<String>,
+    /// Folder for table1.md and table1.csv.
+    #[arg(long, default_value = "track-eval")]
+    pub out: PathBuf,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Arguments of `track eval switching`.
+#[derive(Debug, clap::Args)]
+pub struct SwitchingArgs {
+    /// Trackers (default w-hmm, w-occ, w-eval, full), particles and seed.
+    #[command(flatten)]
+    pub run: TrackerRuns,
+    /// Frames of each scene (default: the scenario's length).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Runs per scene and tracker: run k renders the scene with seed 1 + k and tracks it with
+    /// seed SEED + k; the table gives the mean and range.
+    #[arg(long, default_value_t = 1)]
+    pub seeds: usize,
+    /// Also smooth each run (forward filtering–backward smoothing of the recorded particles)
+    /// and score the smoothed estimates, as rows "TRACKER smoothed".
+    #[arg(long)]
+    pub smooth: bool,
+    /// A tracker configuration file (JSON or TOML, as `track config` or `track
+    /// learn-switching` write), run beside the presets (repeatable).
+    #[arg(long = "config")]
+    pub configs: Vec<PathBuf>,
+    /// Folder for switching.md and switching.csv.
+    #[arg(long, default_value = "track-eval")]
+    pub out: PathBuf,
+}
+
+/// Arguments of `track eval otb`.
+#[derive(Debug, clap::Args)]
+pub struct OtbArgs {
+    /// OTB folders.
+    #[arg(required = true)]
+    pub sequences: Vec<PathBuf>,
+    /// Trackers (default head when no --config is given), particles and seed (both also
+    /// override those of a --config file).
+    #[command(flatten)]
+    pub run: TrackerRuns,
+    /// Edge threshold of the measurement lines, grey levels per pixel (default: the
+    /// preset's, 8); see `track run --help`.
+    #[arg(long)]
+    pub edge_threshold: Option<f32>,
+    /// A tracker configuration file (JSON or TOML, as `track config PRESET` prints), run
+    /// beside the presets (repeatable).
+    #[arg(long = "config")]
+    pub configs: Vec<PathBuf>,
+    /// Folder for otb.md and otb.csv.
+    #[arg(long, default_value = "track-eval")]
+    pub out: PathBuf,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Which trackers an evaluation runs, with how many particles and which seed.
@@ -176,167 +188,179 @@ fn positive(name: &str, v: usize) -> Result<()> {
 /// See [`AppError`].
 pub fn run(args: &Args) -> Result<()> {
     match &args.what {
-        Evaluation::Table1 {
-            scenario,
-            trials,
-            frames,
-            scene_seed,
-            trackers,
-            set,
-            out,
-            quiet,
-        } => {
-            positive("--trials", *trials)?;
-            if let Some(f) = frames {
-                positive("--frames", *f)?;
-            }
-            let trackers = presets(trackers, &TABLE1_TRACKERS)?;
-            crate::output::probe_dir(out)?;
-            let seq = SyntheticSequence::render((*scenario).into(), *frames, *scene_seed, set)?;
-            let bar = progress(
-                (trackers.len() * TABLE1_COLUMNS.len()) as u64,
-                *quiet,
-                "table 1 cells",
-            );
-            let rows = table1(&seq, &trackers, &TABLE1_COLUMNS, *trials, &|| bar.inc(1))?;
-            bar.finish_and_clear();
-            let md = format!(
-                "Odobez Table 1 protocol on the synthetic `{}` scene ({} frames, scene seed {}{}).\n\n{}",
-                seq.name,
-                seq.frames.len(),
-                scene_seed,
-                if set.is_empty() {
-                    String::new()
-                } else {
-                    format!(", overrides {}", set.join(" "))
-                },
-                table1_markdown(&rows, &TABLE1_COLUMNS, *trials)
-            );
-            write_atomic(&out.join("table1.md"), md.as_bytes())?;
-            write_atomic(
-                &out.join("table1.csv"),
-                table1_csv(&rows, &TABLE1_COLUMNS, *trials).as_bytes(),
-            )?;
-            crate::output::println_stdout(&md)?;
-            Ok(())
-        }
-        Evaluation::Switching {
-            run,
-            frames,
-            seeds,
-            smooth,
-            configs,
-            out,
-        } => {
-            let TrackerRuns {
-                trackers,
-                particles,
-                seed,
-            } = run;
-            positive("--particles", *particles)?;
-            positive("--seeds", *seeds)?;
-            let default: &[Preset] = if configs.is_empty() {
-                &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full]
-            } else {
-                &[]
-            };
-            let mut runs: Vec<TrackerConfig> = presets(trackers, default)?
-                .into_iter()
-                .map(|p| p.config(*particles, *seed))
-                .collect();
-            for path in configs {
-                let overrides = Overrides {
-                    particles: Some(*particles),
-                    seed: Some(*seed),
-                    parallel: false,
-                    edge_threshold: None,
+        Evaluation::Table1(a) => run_table1(a),
+        Evaluation::Switching(a) => run_switching(a),
+        Evaluation::Otb(a) => run_otb(a),
+    }
+}
+
+/// `track eval table1`: writes table1.md and table1.csv and prints the table.
+fn run_table1(args: &Table1Args) -> Result<()> {
+    let Table1Args {
+        scenario,
+        trials,
+        frames,
+        scene_seed,
+        trackers,
+        set,
+        out,
+        quiet,
+    } = args;
+    positive("--trials", *trials)?;
+    if let Some(f) = frames {
+        positive("--frames", *f)?;
+    }
+    let trackers = presets(trackers, &TABLE1_TRACKERS)?;
+    crate::output::probe_dir(out)?;
+    let seq = SyntheticSequence::render((*scenario).into(), *frames, *scene_seed, set)?;
+    let bar = progress(
+        (trackers.len() * TABLE1_COLUMNS.len()) as u64,
+        *quiet,
+        "table 1 cells",
+    );
+    let rows = table1(&seq, &trackers, &TABLE1_COLUMNS, *trials, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    let md = format!(
+        "Odobez Table 1 protocol on the synthetic `{}` scene ({} frames, scene seed {}{}).\n\n{}",
+        seq.name,
+        seq.frames.len(),
+        scene_seed,
+        if set.is_empty() {
+            String::new()
+        } else {
+            format!(", overrides {}", set.join(" "))
+        },
+        table1_markdown(&rows, &TABLE1_COLUMNS, *trials)
+    );
+    write_atomic(&out.join("table1.md"), md.as_bytes())?;
+    write_atomic(
+        &out.join("table1.csv"),
+        table1_csv(&rows, &TABLE1_COLUMNS, *trials).as_bytes(),
+    )?;
+    crate::output::println_stdout(&md)?;
+    Ok(())
+}
+
+/// `track eval switching`: writes switching.md and switching.csv and prints the table.
+fn run_switching(args: &SwitchingArgs) -> Result<()> {
+    let SwitchingArgs {
+        run,
+        frames,
+        seeds,
+        smooth,
+        configs,
+        out,
+    } = args;
+    let TrackerRuns {
+        trackers,
+        particles,
+        seed,
+    } = run;
+    positive("--particles", *particles)?;
+    positive("--seeds", *seeds)?;
+    let default: &[Preset] = if configs.is_empty() {
+        &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full]
+    } else {
+        &[]
+    };
+    let mut runs: Vec<TrackerConfig> = presets(trackers, default)?
+        .into_iter()
+        .map(|p| p.config(*particles, *seed))
+        .collect();
+    for path in configs {
+        let overrides = Overrides {
+            particles: Some(*particles),
+            seed: Some(*seed),
+            parallel: false,
+            edge_threshold: None,
+        };
+        runs.push(tracker_config("", Some(path), overrides)?);
+    }
+    crate::output::probe_dir(out)?;
+    let smoother = SmootherSettings::default();
+    let mut rows = Vec::new();
+    for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
+        for k in 0..*seeds as u64 {
+            let seq = SyntheticSequence::render(scenario, *frames, 1 + k, &[])?;
+            for run in &runs {
+                let config = TrackerConfig {
+                    seed: *seed + k,
+                    ..run.clone()
                 };
-                runs.push(tracker_config("", Some(path), overrides)?);
-            }
-            crate::output::probe_dir(out)?;
-            let smoother = SmootherSettings::default();
-            let mut rows = Vec::new();
-            for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
-                for k in 0..*seeds as u64 {
-                    let seq = SyntheticSequence::render(scenario, *frames, 1 + k, &[])?;
-                    for run in &runs {
-                        let config = TrackerConfig {
-                            seed: *seed + k,
-                            ..run.clone()
-                        };
-                        let name = run.name.clone();
-                        if *smooth {
-                            let (output, smoothed, _) = seq.track_and_smooth(config, &smoother)?;
-                            rows.push(switching_scores(&seq, &name, &output.records));
-                            let smoothed_name = format!("{name} smoothed");
-                            rows.push(switching_scores(&seq, &smoothed_name, &smoothed));
-                        } else {
-                            let output = seq.track(config, None)?;
-                            rows.push(switching_scores(&seq, &name, &output.records));
-                        }
-                    }
+                let name = run.name.clone();
+                if *smooth {
+                    let (output, smoothed, _) = seq.track_and_smooth(config, &smoother)?;
+                    rows.push(switching_scores(&seq, &name, &output.records));
+                    let smoothed_name = format!("{name} smoothed");
+                    rows.push(switching_scores(&seq, &smoothed_name, &smoothed));
+                } else {
+                    let output = seq.track(config, None)?;
+                    rows.push(switching_scores(&seq, &name, &output.records));
                 }
             }
-            let md = switching_markdown(&rows);
-            write_atomic(&out.join("switching.md"), md.as_bytes())?;
-            write_atomic(&out.join("switching.csv"), switching_csv(&rows).as_bytes())?;
-            crate::output::println_stdout(&md)?;
-            Ok(())
-        }
-        Evaluation::Otb {
-            sequences,
-            run,
-            edge_threshold,
-            configs,
-            out,
-            quiet,
-        } => {
-            let TrackerRuns {
-                trackers,
-                particles,
-                seed,
-            } = run;
-            let overrides = || Overrides {
-                particles: Some(*particles),
-                seed: Some(*seed),
-                parallel: false,
-                edge_threshold: *edge_threshold,
-            };
-            let default: &[Preset] = if configs.is_empty() {
-                &[Preset::Head]
-            } else {
-                &[]
-            };
-            let mut runs = Vec::new();
-            for p in presets(trackers, default)? {
-                runs.push(tracker_config(p.name(), None, overrides())?);
-            }
-            for path in configs {
-                // With a file, the preset name is not read.
-                runs.push(tracker_config("", Some(path), overrides())?);
-            }
-            // Results are written after every sequence is tracked: an output folder that cannot
-            // be made is found before that.
-            crate::output::probe_dir(out)?;
-            let mut rows: Vec<(String, String, SequenceMetrics)> = Vec::new();
-            for config in &runs {
-                let mut per_tracker = Vec::new();
-                for dir in sequences {
-                    let m = evaluate_otb(dir, config, *quiet)?;
-                    rows.push((sequence_name(dir), config.name.clone(), m.clone()));
-                    per_tracker.push(m);
-                }
-                if let Some(mean) = mean_metrics(&per_tracker) {
-                    rows.push(("mean".to_owned(), config.name.clone(), mean));
-                }
-            }
-            let md = otb_markdown(&rows);
-            write_atomic(&out.join("otb.md"), md.as_bytes())?;
-            write_atomic(&out.join("otb.csv"), otb_csv(&rows).as_bytes())?;
-            crate::output::println_stdout(&md)?;
-            Ok(())
         }
     }
+    let md = switching_markdown(&rows);
+    write_atomic(&out.join("switching.md"), md.as_bytes())?;
+    write_atomic(&out.join("switching.csv"), switching_csv(&rows).as_bytes())?;
+    crate::output::println_stdout(&md)?;
+    Ok(())
+}
+
+/// `track eval otb`: writes otb.md and otb.csv and prints the table.
+fn run_otb(args: &OtbArgs) -> Result<()> {
+    let OtbArgs {
+        sequences,
+        run,
+        edge_threshold,
+        configs,
+        out,
+        quiet,
+    } = args;
+    let TrackerRuns {
+        trackers,
+        particles,
+        seed,
+    } = run;
+    let overrides = || Overrides {
+        particles: Some(*particles),
+        seed: Some(*seed),
+        parallel: false,
+        edge_threshold: *edge_threshold,
+    };
+    let default: &[Preset] = if configs.is_empty() {
+        &[Preset::Head]
+    } else {
+        &[]
+    };
+    let mut runs = Vec::new();
+    for p in presets(trackers, default)? {
+        runs.push(tracker_config(p.name(), None, overrides())?);
+    }
+    for path in configs {
+        // With a file, the preset name is not read.
+        runs.push(tracker_config("", Some(path), overrides())?);
+    }
+    // Results are written after every sequence is tracked: an output folder that cannot be
+    // made is found before that.
+    crate::output::probe_dir(out)?;
+    let mut rows: Vec<(String, String, SequenceMetrics)> = Vec::new();
+    for config in &runs {
+        let mut per_tracker = Vec::new();
+        for dir in sequences {
+            let m = evaluate_otb(dir, config, *quiet)?;
+            rows.push((sequence_name(dir), config.name.clone(), m.clone()));
+            per_tracker.push(m);
+        }
+        if let Some(mean) = mean_metrics(&per_tracker) {
+            rows.push(("mean".to_owned(), config.name.clone(), mean));
+        }
+    }
+    let md = otb_markdown(&rows);
+    write_atomic(&out.join("otb.md"), md.as_bytes())?;
+    write_atomic(&out.join("otb.csv"), otb_csv(&rows).as_bytes())?;
+    crate::output::println_stdout(&md)?;
+    Ok(())
 }
 
 fn sequence_name(dir: &Path) -> String {

@@ -19,9 +19,10 @@ use crate::record::{
 };
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
-use crate::sequence::{FrameSource, open_sequence};
+use crate::sequence::{FrameSource, Sequence, Source, open_sequence};
 use thinned::Thinned;
 
+mod frames;
 mod signals;
 mod thinned;
 use crate::session::{ColourBy, DrawOptions, Session};
@@ -100,8 +101,9 @@ pub struct Args {
     pub edge_threshold: Option<f32>,
     /// Also smooth the run once every frame is tracked (forward filtering–backward smoothing of
     /// the recorded particles: each frame's estimate given the whole sequence) and write
-    /// OUT/smoothed.csv (the columns of track.csv) and OUT/smoothed_boxes.txt. Memory grows with
-    /// frames × particles; not for the head tracker, nor for a stream that is interrupted.
+    /// OUT/smoothed.csv (the columns of track.csv) and OUT/smoothed_boxes.txt; the plots draw
+    /// both. Memory grows with frames × particles; not for the head tracker, nor for a run that
+    /// is interrupted.
     #[arg(long)]
     pub smooth: bool,
     /// No progress bar and no summary.
@@ -335,11 +337,6 @@ pub fn prepare_out(out: &Path) -> Result<()> {
 
 /// What one frame read from the sequence produced: the reader runs on its own thread, one frame
 /// ahead, so a signal is noticed even while standard input is waiting for data.
-type Incoming = Result<Option<crate::sequence::Frame>>;
-
-/// How long the run waits for the next frame before checking for a signal again.
-const POLL: std::time::Duration = std::time::Duration::from_millis(50);
-
 /// Runs `track run`.
 ///
 /// Inputs are checked before anything is written: a folder or a `.y4m` file is pre-scanned
@@ -353,74 +350,8 @@ const POLL: std::time::Duration = std::time::Duration::from_millis(50);
 /// # Errors
 /// See [`AppError`].
 pub fn run(args: &Args) -> Result<()> {
-    let config = tracker_config(
-        &args.tracker,
-        args.config.as_deref(),
-        Overrides {
-            particles: args.particles,
-            seed: args.seed,
-            parallel: args.parallel,
-            edge_threshold: args.edge_threshold,
-        },
-    )?;
-    let sequence = open_sequence(&args.sequence)?;
-    let (known_frames, width, height) = if sequence.source.is_stream() {
-        let (w, h) = sequence
-            .source
-            .frame_size()
-            .ok_or_else(|| AppError::input(&args.sequence, "a stream without a frame size"))?;
-        (None, w, h)
-    } else {
-        let info = sequence.source.validate_all()?;
-        (Some(info.frames), info.width, info.height)
-    };
-    let truth = match (&sequence.groundtruth, known_frames) {
-        (Some(path), Some(frames)) => {
-            let t = load_groundtruth(path)?;
-            check_groundtruth_len(&t, frames, path)?;
-            Some(t)
-        }
-        _ => None,
-    };
-    let (start, init) = match (args.init, args.init_ellipse, &truth) {
-        (Some(b), _, _) => {
-            b.validate_in_frame(width, height, "--init")?;
-            (0, b.inscribed_ellipse())
-        }
-        (None, Some(e), _) => {
-            e.bounding_box()
-                .validate_in_frame(width, height, "--init-ellipse")?;
-            (0, initial_ellipse_for(&e, &config)?)
-        }
-        (None, None, Some(t)) => {
-            let path = sequence
-                .groundtruth
-                .as_deref()
-                .unwrap_or(Path::new("ground truth"));
-            let (k, b) = first_box_in_frame(t, path, &sequence.name, width, height)?;
-            (k, b.inscribed_ellipse())
-        }
-        (None, None, None) => {
-            return Err(AppError::setting(
-                "--init",
-                "this sequence has no ground truth: give --init x,y,w,h or --init-ellipse",
-            ));
-        }
-    };
-    let mut config = config;
-    if args.smooth {
-        if config.region.is_some() {
-            return Err(AppError::setting(
-                "--smooth",
-                format!(
-                    "the {} tracker cannot be smoothed (only the contour trackers record their particles)",
-                    config.name
-                ),
-            ));
-        }
-        config.filter.history = Some(Default::default());
-    }
-    let tracker = trackers::build(config.clone())
+    let (input, source) = CheckedInput::open(args)?;
+    let tracker = trackers::build(input.config.clone())
         .map_err(|e| AppError::setting("--tracker", e.to_string()))?;
     // Everything the run reads is checked; now the output folder, before any tracking.
     prepare_out(&args.out)?;
@@ -430,119 +361,155 @@ pub fn run(args: &Args) -> Result<()> {
         colour_by: args.colour_by,
         ..DrawOptions::default()
     });
-    let mut session = Session::new(tracker, draw);
-    // With a known length the GIF takes every k-th overlay and the strip fixed frames, as
-    // before; a stream keeps evenly spaced frames in bounded memory ([`Thinned`]).
-    let mut gif = Thinned::new(
-        GIF_MAX_FRAMES,
-        known_frames.map_or(1, |n| n.div_ceil(GIF_MAX_FRAMES)),
-    );
-    let strip_known = known_frames.map(|n| strip_indices(n - start, STRIP_FRAMES));
-    let mut strip = Thinned::new(2 * STRIP_FRAMES, 1);
-    let mut written = Vec::new();
-    let bar = match known_frames {
+    let session = Session::new(tracker, draw);
+    let mut kept = Kept::new(input.known_frames, input.start);
+    let bar = match input.known_frames {
         Some(n) => progress(n as u64, args.quiet, ""),
         None => stream_progress(args.quiet),
     };
-    bar.set_message(format!("{} on {}", config.name, sequence.name));
-
-    let (tx, rx) = std::sync::mpsc::sync_channel::<Incoming>(1);
-    let frame_rate = sequence.source.frame_rate();
-    let decoder = sequence.source.stopper();
-    let mut source = sequence.source;
-    let reader = std::thread::spawn(move || {
-        loop {
-            let next = source.next_frame();
-            let done = !matches!(next, Ok(Some(_)));
-            if tx.send(next).is_err() || done {
-                break;
-            }
-        }
-    });
-    let mut frames_read = 0;
-    let mut stop: Option<AppError> = None;
-    loop {
-        if let Some((name, number)) = signals.received() {
-            stop = Some(AppError::Interrupted {
-                signal: name,
-                number,
-                frames: 0,
-                out: args.out.clone(),
-            });
-            break;
-        }
-        let frame = match rx.recv_timeout(POLL) {
-            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => continue,
-            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) | Ok(Ok(None)) => break,
-            Ok(Err(e)) => {
-                stop = Some(e);
-                break;
-            }
-            Ok(Ok(Some(frame))) => frame,
-        };
-        frames_read += 1;
-        bar.inc(1);
-        if frame.index < start {
-            continue;
-        }
-        let gt = truth
-            .as_ref()
-            .and_then(|t| t.get(frame.index).copied().flatten());
-        if let Err(e) = session.push(&frame, &init, gt) {
-            stop = Some(e);
-            break;
-        }
-        if let Some(img) = session.take_overlay() {
-            let k = frame.index - start;
-            if args.overlay {
-                let name = format!("overlay/{:04}.png", frame.index + 1);
-                write_png(&args.out.join(&name), &img)?;
-                written.push(name);
-            }
-            if args.report {
-                let label = format!("frame {}", frame.index + 1);
-                match &strip_known {
-                    Some(ks) if ks.contains(&k) => strip.push(k, (label, thumbnail(&img, 200))),
-                    Some(_) => {}
-                    None if strip.wants(k) => strip.push(k, (label, thumbnail(&img, 200))),
-                    None => {}
-                }
-            }
-            if args.gif {
-                gif.push(k, img);
-            }
-        }
-    }
-    bar.finish_and_clear();
-    drop(rx);
-    if stop.is_none() {
-        // The reader has ended (end of input or error already received); it never blocks here.
-        let _ = reader.join();
-    } else if let Some(ffmpeg) = &decoder {
-        // A video's decoder is stopped and reaped now, not left to run to the end of the file;
-        // its reader then sees the end of its input and ends too.
-        ffmpeg.stop();
-        let _ = reader.join();
-    }
-    // A signal that arrived while the last frames were read still marks the run as interrupted.
-    if stop.is_none()
-        && let Some((name, number)) = signals.received()
-    {
-        stop = Some(AppError::Interrupted {
-            signal: name,
-            number,
-            frames: 0,
-            out: args.out.clone(),
-        });
-    }
-    // A smoother needs the whole run: an interrupted one is written as filtered only.
-    let smoothed = if args.smooth && stop.is_none() {
-        Some(session.smoothed(&trackers::SmootherSettings::default())?.0)
-    } else {
-        None
+    bar.set_message(format!("{} on {}", input.config.name, input.name));
+    let frames = frames::Frames {
+        start: input.start,
+        init: &input.init,
+        truth: input.truth.as_deref(),
+        signals: &signals,
+        bar: &bar,
     };
-    let output = session.finish();
+    let tracked = frames.track(args, source, session, &mut kept)?;
+    write_outputs(args, &input, tracked, kept)
+}
+
+/// Everything `track run` reads, checked before anything is written.
+struct CheckedInput {
+    config: TrackerConfig,
+    /// A short name of the sequence for reports.
+    name: String,
+    /// Frames per second, when the input states it.
+    frame_rate: Option<f64>,
+    /// The number of frames, unless the input is a stream.
+    known_frames: Option<usize>,
+    width: usize,
+    height: usize,
+    /// The ground truth of an OTB folder, one box (or none) per frame.
+    truth: Option<Vec<Option<Box2>>>,
+    /// The first frame tracked (the first labelled one when the ground truth gives the start).
+    start: usize,
+    /// The contour the tracker starts from.
+    init: Ellipse,
+}
+
+impl CheckedInput {
+    /// Checks the settings and the input; returns them with the frames to track.
+    fn open(args: &Args) -> Result<(Self, Source)> {
+        let mut config = tracker_config(
+            &args.tracker,
+            args.config.as_deref(),
+            Overrides {
+                particles: args.particles,
+                seed: args.seed,
+                parallel: args.parallel,
+                edge_threshold: args.edge_threshold,
+            },
+        )?;
+        if args.smooth {
+            if config.region.is_some() {
+                return Err(AppError::setting(
+                    "--smooth",
+                    format!(
+                        "the {} tracker cannot be smoothed (only the contour trackers record their particles)",
+                        config.name
+                    ),
+                ));
+            }
+            config.filter.history = Some(Default::default());
+        }
+        let sequence = open_sequence(&args.sequence)?;
+        let (known_frames, width, height) = if sequence.source.is_stream() {
+            let (w, h) = sequence
+                .source
+                .frame_size()
+                .ok_or_else(|| AppError::input(&args.sequence, "a stream without a frame size"))?;
+            (None, w, h)
+        } else {
+            let info = sequence.source.validate_all()?;
+            (Some(info.frames), info.width, info.height)
+        };
+        let truth = match (&sequence.groundtruth, known_frames) {
+            (Some(path), Some(frames)) => {
+                let t = load_groundtruth(path)?;
+                check_groundtruth_len(&t, frames, path)?;
+                Some(t)
+            }
+            _ => None,
+        };
+        let (start, init) =
+            initial_contour(args, &config, &sequence, truth.as_deref(), (width, height))?;
+        let input = Self {
+            config,
+            name: sequence.name,
+            frame_rate: sequence.source.frame_rate(),
+            known_frames,
+            width,
+            height,
+            truth,
+            start,
+            init,
+        };
+        Ok((input, sequence.source))
+    }
+}
+
+/// The first frame and the initial contour: `--init`, `--init-ellipse`, or the first box of the
+/// ground truth that lies in the frame.
+fn initial_contour(
+    args: &Args,
+    config: &TrackerConfig,
+    sequence: &Sequence,
+    truth: Option<&[Option<Box2>]>,
+    (width, height): (usize, usize),
+) -> Result<(usize, Ellipse)> {
+    match (args.init, args.init_ellipse, truth) {
+        (Some(b), _, _) => {
+            b.validate_in_frame(width, height, "--init")?;
+            Ok((0, b.inscribed_ellipse()))
+        }
+        (None, Some(e), _) => {
+            e.bounding_box()
+                .validate_in_frame(width, height, "--init-ellipse")?;
+            Ok((0, initial_ellipse_for(&e, config)?))
+        }
+        (None, None, Some(t)) => {
+            let path = sequence
+                .groundtruth
+                .as_deref()
+                .unwrap_or(Path::new("ground truth"));
+            let (k, b) = first_box_in_frame(t, path, &sequence.name, width, height)?;
+            Ok((k, b.inscribed_ellipse()))
+        }
+        (None, None, None) => Err(AppError::setting(
+            "--init",
+            "this sequence has no ground truth: give --init x,y,w,h or --init-ellipse",
+        )),
+    }
+}
+
+/// Writes every output of a run from what the frame loop left, then reports the stop (a
+/// signal or a stream error) as the run's error, or prints the summary.
+fn write_outputs(
+    args: &Args,
+    input: &CheckedInput,
+    tracked: frames::Tracked,
+    kept: Kept,
+) -> Result<()> {
+    let frames::Tracked {
+        output,
+        smoothed: tracked_smoothed,
+        frames_read,
+        mut stop,
+    } = tracked;
+    let (config, start) = (&input.config, input.start);
     let records = output.records;
+    let smoothed = tracked_smoothed;
     if records.is_empty() {
         return Err(stop.unwrap_or_else(|| {
             AppError::input(
@@ -561,11 +528,17 @@ pub fn run(args: &Args) -> Result<()> {
         },
         frames_read,
     });
+    let Kept {
+        gif,
+        strip,
+        strip_known,
+        mut written,
+    } = kept;
 
     write_csv_with(
         &args.out.join("track.csv"),
         &records,
-        CsvColumns::of_tracker(&config),
+        CsvColumns::of_tracker(config),
     )?;
     write_atomic(
         &args.out.join("boxes.txt"),
@@ -576,7 +549,7 @@ pub fn run(args: &Args) -> Result<()> {
         write_csv_with(
             &args.out.join("smoothed.csv"),
             smoothed,
-            CsvColumns::of_tracker(&config),
+            CsvColumns::of_tracker(config),
         )?;
         write_atomic(
             &args.out.join("smoothed_boxes.txt"),
@@ -584,6 +557,67 @@ pub fn run(args: &Args) -> Result<()> {
         )?;
         written.extend(["smoothed.csv".to_owned(), "smoothed_boxes.txt".to_owned()]);
     }
+    let figures =
+        write_animation_and_plots(args, &records, smoothed.as_deref(), gif, &mut written)?;
+    let metrics = match &input.truth {
+        Some(t) => Some(score(start, &records, t, output.seconds)?),
+        None => None,
+    };
+    if args.report {
+        written.push("report.html".into());
+    }
+    written.push("summary.json".into());
+    let summary = Summary {
+        tool_version: env!("CARGO_PKG_VERSION").to_owned(),
+        sequence: input.name.clone(),
+        tracker: config.name.clone(),
+        particles: config.particles,
+        seed: config.seed,
+        frames: records.len(),
+        width: input.width,
+        height: input.height,
+        frame_rate: input.frame_rate,
+        initial_box: Some(input.init.bounding_box()),
+        seconds: output.seconds,
+        fps: records.len() as f64 / output.seconds.max(1e-9),
+        mean_millis: 1e3 * output.seconds / records.len().max(1) as f64,
+        status_counts: status_counts(&records),
+        metrics,
+        outputs: written,
+        interrupted,
+    };
+    if args.report {
+        let report = ReportInput {
+            title: format!("{} — {}", input.name, config.name),
+            subtitle: format!(
+                "track run {} --tracker {} --particles {} --seed {}",
+                args.sequence, config.name, config.particles, config.seed
+            ),
+            metrics: summary_rows(&summary),
+            figures,
+            strip: strip_frames(strip, strip_known.is_some()),
+        };
+        write_report(&args.out.join("report.html"), &report)?;
+    }
+    write_summary(&args.out.join("summary.json"), &summary)?;
+    if let Some(e) = stop {
+        return Err(e);
+    }
+    if !args.quiet {
+        print_summary(&summary, &args.out)?;
+    }
+    Ok(())
+}
+
+/// Writes `track.gif` and `plots/*.svg` when asked for, adding them to `written`; returns the
+/// figures, which the report shows too (none when neither plots nor a report are asked for).
+fn write_animation_and_plots(
+    args: &Args,
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+    gif: Thinned<RgbImage>,
+    written: &mut Vec<String>,
+) -> Result<Vec<crate::plots::Figure>> {
     if args.gif {
         let every = gif.stride();
         let frames: Vec<RgbImage> = gif.into_items().into_iter().map(|(_, f)| f).collect();
@@ -595,7 +629,7 @@ pub fn run(args: &Args) -> Result<()> {
         written.push("track.gif".into());
     }
     let figures = if args.plots || args.report {
-        all_figures(&records, smoothed.as_deref())?
+        all_figures(records, smoothed)?
     } else {
         Vec::new()
     };
@@ -606,67 +640,80 @@ pub fn run(args: &Args) -> Result<()> {
             }
         }
     }
-    let metrics = match &truth {
-        Some(t) => Some(score(start, &records, t, output.seconds)?),
-        None => None,
-    };
-    let mut summary = Summary {
-        tool_version: env!("CARGO_PKG_VERSION").to_owned(),
-        sequence: sequence.name.clone(),
-        tracker: config.name.clone(),
-        particles: config.particles,
-        seed: config.seed,
-        frames: records.len(),
-        width,
-        height,
-        frame_rate,
-        initial_box: Some(init.bounding_box()),
-        seconds: output.seconds,
-        fps: records.len() as f64 / output.seconds.max(1e-9),
-        mean_millis: 1e3 * output.seconds / records.len().max(1) as f64,
-        status_counts: status_counts(&records),
-        metrics,
-        outputs: Vec::new(),
-        interrupted,
-    };
-    if args.report {
-        written.push("report.html".into());
+    Ok(figures)
+}
+
+/// The overlays kept for the report's strip: all of them when the frames were picked in
+/// advance (known length), else evenly spaced ones among those the stream kept.
+fn strip_frames(
+    strip: Thinned<(String, RgbImage)>,
+    picked_in_advance: bool,
+) -> Vec<(String, RgbImage)> {
+    let kept: Vec<_> = strip.into_items().into_iter().map(|(_, f)| f).collect();
+    if picked_in_advance {
+        return kept;
     }
-    written.push("summary.json".into());
-    summary.outputs = written;
-    if args.report {
-        let kept: Vec<_> = strip.into_items().into_iter().map(|(_, f)| f).collect();
-        let picked = match strip_known {
-            Some(_) => kept,
-            None => {
-                let ks = strip_indices(kept.len(), STRIP_FRAMES);
-                kept.into_iter()
-                    .enumerate()
-                    .filter(|(i, _)| ks.contains(i))
-                    .map(|(_, f)| f)
-                    .collect()
-            }
-        };
-        let input = ReportInput {
-            title: format!("{} — {}", sequence.name, config.name),
-            subtitle: format!(
-                "track run {} --tracker {} --particles {} --seed {}",
-                args.sequence, config.name, config.particles, config.seed
+    let ks = strip_indices(kept.len(), STRIP_FRAMES);
+    kept.into_iter()
+        .enumerate()
+        .filter(|(i, _)| ks.contains(i))
+        .map(|(_, f)| f)
+        .collect()
+}
+
+/// What a run keeps of its overlays while it tracks, and the outputs written so far.
+struct Kept {
+    /// Frames for the animated GIF.
+    gif: Thinned<RgbImage>,
+    /// Labelled thumbnails for the report's strip.
+    strip: Thinned<(String, RgbImage)>,
+    /// The strip's frames (relative to the start), when the length is known in advance.
+    strip_known: Option<Vec<usize>>,
+    /// Output files written, relative to `--out`.
+    written: Vec<String>,
+}
+
+impl Kept {
+    fn new(known_frames: Option<usize>, start: usize) -> Self {
+        // With a known length the GIF takes every k-th overlay and the strip fixed frames, as
+        // before; a stream keeps evenly spaced frames in bounded memory ([`Thinned`]).
+        Self {
+            gif: Thinned::new(
+                GIF_MAX_FRAMES,
+                known_frames.map_or(1, |n| n.div_ceil(GIF_MAX_FRAMES)),
             ),
-            metrics: summary_rows(&summary),
-            figures,
-            strip: picked,
-        };
-        write_report(&args.out.join("report.html"), &input)?;
+            strip: Thinned::new(2 * STRIP_FRAMES, 1),
+            strip_known: known_frames.map(|n| strip_indices(n - start, STRIP_FRAMES)),
+            written: Vec::new(),
+        }
     }
-    write_summary(&args.out.join("summary.json"), &summary)?;
-    if let Some(e) = stop {
-        return Err(e);
+
+    /// Writes or keeps the overlay `img` of frame `index` (the `k`-th tracked) as the run's
+    /// options ask.
+    ///
+    /// # Errors
+    /// [`AppError::Write`] when the overlay PNG cannot be written.
+    fn overlay(&mut self, args: &Args, index: usize, k: usize, img: RgbImage) -> Result<()> {
+        if args.overlay {
+            let name = format!("overlay/{:04}.png", index + 1);
+            write_png(&args.out.join(&name), &img)?;
+            self.written.push(name);
+        }
+        if args.report {
+            let label = format!("frame {}", index + 1);
+            let wanted = match &self.strip_known {
+                Some(ks) => ks.contains(&k),
+                None => self.strip.wants(k),
+            };
+            if wanted {
+                self.strip.push(k, (label, thumbnail(&img, 200)));
+            }
+        }
+        if args.gif {
+            self.gif.push(k, img);
+        }
+        Ok(())
     }
-    if !args.quiet {
-        print_summary(&summary, &args.out)?;
-    }
-    Ok(())
 }
 
 /// A progress spinner for a stream of unknown length, hidden when `quiet`.
