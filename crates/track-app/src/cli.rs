@@ -73,4 +73,3 @@ where
         Cli::try_parse_from(args).map_err(|e| AppError::setting("arguments", e.to_string()))?;
     run(cli)
 }
-
