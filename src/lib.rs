@@ -17,3 +17,13 @@ pub use smc_core;
 pub use track_app;
 #[doc(inline)]
 pub use trackers;
+
+// The Rust code in the top-level README and in the README of motion-est (whose sources this
+// crate does not own) is compiled and run as doctests of this crate.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+mod readme_doctest {}
+
+#[cfg(doctest)]
+#[doc = include_str!("../crates/motion-est/README.md")]
+mod motion_est_readme_doctest {}

@@ -1,4 +1,5 @@
-//! Profiling driver on the benchmark's frame and 200 hypotheses
+//! A profiling driver, not an example of use (for that, see the crate's README): the
+//! benchmark's frame and 200 hypotheses
 //! (`cargo run --release -p contour-obs --example obs_profile -- ARGS`):
 //!
 //! - `hash`: every batch value (Odobez, Wu, occlusion × 15 and 40 lines, sequential and rayon)

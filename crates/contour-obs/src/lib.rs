@@ -74,6 +74,11 @@ mod odobez;
 mod scan;
 mod wu;
 
+// The README's example is compiled and run as a doctest, so it cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+mod readme_doctest {}
+
 pub use affine::{Affine2, BoundingBox, Ellipse};
 pub use clutter::{
     Cluster, ClutterModel, ClutterSettings, kmeans_1d, learn_clutter, line_densities,

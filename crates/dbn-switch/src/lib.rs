@@ -54,6 +54,11 @@ mod switching;
 #[cfg(test)]
 mod test_util;
 
+// The README's example is compiled and run as a doctest, so it cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+mod readme_doctest {}
+
 pub use clutter::{ClutterConfig, ClutterEstimate, ClutterHmm, ClutterState, LambdaModel};
 pub use config::ConfigFile;
 pub use error::{Error, Result};

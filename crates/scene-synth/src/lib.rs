@@ -45,6 +45,11 @@ pub mod trajectory;
 mod truth;
 mod writer;
 
+// The README's example is compiled and run as a doctest, so it cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+mod readme_doctest {}
+
 pub use error::{Error, Result};
 pub use geometry::{BoxRect, Ellipse, OdobezState, WuAffine};
 pub use params::{

@@ -80,6 +80,11 @@ pub mod rng;
 pub mod smooth;
 pub mod weights;
 
+// The README's example is compiled and run as a doctest, so it cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+mod readme_doctest {}
+
 pub use error::{Degeneracy, Error, Result};
 pub use estimate::{AsVector, LabelEstimate, MeanCovariance};
 pub use filter::{FilterSettings, ParticleFilter, ResampleReport, StepDiagnostics, WeightReport};

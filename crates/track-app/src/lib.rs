@@ -22,4 +22,9 @@ pub mod report;
 pub mod sequence;
 pub mod session;
 
+// The README's example is compiled and run as a doctest, so it cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+mod readme_doctest {}
+
 pub use error::{AppError, Result};
