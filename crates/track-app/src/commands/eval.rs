@@ -141,6 +141,35 @@ pub struct TrackerRuns {
     pub seed: u64,
 }
 
+impl TrackerRuns {
+    /// The configurations to run: the `--tracker` presets (`default` when neither a preset nor a
+    /// `--config` file is given) and then the `--config` files, each with these particles and
+    /// seed and the edge threshold, when given.
+    fn configs(
+        &self,
+        files: &[PathBuf],
+        default: &[Preset],
+        edge_threshold: Option<f32>,
+    ) -> Result<Vec<TrackerConfig>> {
+        let overrides = || Overrides {
+            particles: Some(self.particles),
+            seed: Some(self.seed),
+            parallel: false,
+            edge_threshold,
+        };
+        let default = if files.is_empty() { default } else { &[] };
+        let mut runs = Vec::new();
+        for p in presets(&self.trackers, default)? {
+            runs.push(tracker_config(p.name(), None, overrides())?);
+        }
+        for path in files {
+            // With a file, the preset name is not read.
+            runs.push(tracker_config("", Some(path), overrides())?);
+        }
+        Ok(runs)
+    }
+}
+
 /// The synthetic scenarios, for the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum ScenarioArg {
@@ -251,31 +280,14 @@ fn run_switching(args: &SwitchingArgs) -> Result<()> {
         configs,
         out,
     } = args;
-    let TrackerRuns {
-        trackers,
-        particles,
-        seed,
-    } = run;
-    positive("--particles", *particles)?;
+    positive("--particles", run.particles)?;
     positive("--seeds", *seeds)?;
-    let default: &[Preset] = if configs.is_empty() {
-        &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full]
-    } else {
-        &[]
-    };
-    let mut runs: Vec<TrackerConfig> = presets(trackers, default)?
-        .into_iter()
-        .map(|p| p.config(*particles, *seed))
-        .collect();
-    for path in configs {
-        let overrides = Overrides {
-            particles: Some(*particles),
-            seed: Some(*seed),
-            parallel: false,
-            edge_threshold: None,
-        };
-        runs.push(tracker_config("", Some(path), overrides)?);
-    }
+    let runs = run.configs(
+        configs,
+        &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full],
+        None,
+    )?;
+    let seed = &run.seed;
     crate::output::probe_dir(out)?;
     let smoother = SmootherSettings::default();
     let mut rows = Vec::new();
@@ -317,30 +329,7 @@ fn run_otb(args: &OtbArgs) -> Result<()> {
         out,
         quiet,
     } = args;
-    let TrackerRuns {
-        trackers,
-        particles,
-        seed,
-    } = run;
-    let overrides = || Overrides {
-        particles: Some(*particles),
-        seed: Some(*seed),
-        parallel: false,
-        edge_threshold: *edge_threshold,
-    };
-    let default: &[Preset] = if configs.is_empty() {
-        &[Preset::Head]
-    } else {
-        &[]
-    };
-    let mut runs = Vec::new();
-    for p in presets(trackers, default)? {
-        runs.push(tracker_config(p.name(), None, overrides())?);
-    }
-    for path in configs {
-        // With a file, the preset name is not read.
-        runs.push(tracker_config("", Some(path), overrides())?);
-    }
+    let runs = run.configs(configs, &[Preset::Head], *edge_threshold)?;
     // Results are written after every sequence is tracked: an output folder that cannot be
     // made is found before that.
     crate::output::probe_dir(out)?;
