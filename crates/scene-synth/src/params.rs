@@ -352,7 +352,7 @@ impl Default for HeadTurnParams {
 }
 
 /// Visible-fraction thresholds of the status label, consistent with Wu's γ ranges (γ ≈ 1 − v;
-/// W §6.3 with MODELS.md's fix: locked γ ∈ [0, 0.2], lost γ ∈ [0.8, 1]).
+/// W §6.3 with docs/MODELS.md's fix: locked γ ∈ [0, 0.2], lost γ ∈ [0.8, 1]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StatusThresholds {
