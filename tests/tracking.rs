@@ -79,7 +79,7 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len() as f64
 }
 
-/// MODELS.md's failure rule: IoU below 0.2 for 5 consecutive frames.
+/// docs/MODELS.md's failure rule: IoU below 0.2 for 5 consecutive frames.
 fn failed(ious: &[f64]) -> bool {
     ious.windows(5).any(|w| w.iter().all(|&v| v < 0.2))
 }

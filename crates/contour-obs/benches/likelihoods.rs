@@ -17,6 +17,29 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 mod frame;
 use frame::{H, N, W, scene};
 
+/// The three likelihoods on `lines`, built outside the timed loops.
+fn models(lines: LineSettings) -> (OdobezLikelihood, WuLikelihood, OcclusionLikelihood) {
+    let od = OdobezLikelihood::new(
+        OdobezSettings {
+            lines,
+            ..Default::default()
+        },
+        &Template::UnitCircle,
+    );
+    let wu_s = WuSettings {
+        lines,
+        ..Default::default()
+    };
+    match (
+        od,
+        WuLikelihood::new(wu_s, &Template::UnitCircle),
+        OcclusionLikelihood::new(wu_s, &Template::UnitCircle),
+    ) {
+        (Ok(a), Ok(b), Ok(c)) => (a, b, c),
+        _ => panic!("bad settings"),
+    }
+}
+
 fn bench(c: &mut Criterion) {
     let s = scene();
     let image = match GreyView::new(W, H, &s.data) {
@@ -37,25 +60,7 @@ fn bench(c: &mut Criterion) {
                 panic!("{e}");
             }
         };
-        let od = OdobezLikelihood::new(
-            OdobezSettings {
-                lines,
-                ..Default::default()
-            },
-            &Template::UnitCircle,
-        );
-        let wu_s = WuSettings {
-            lines,
-            ..Default::default()
-        };
-        let (od, wu, occ) = match (
-            od,
-            WuLikelihood::new(wu_s, &Template::UnitCircle),
-            OcclusionLikelihood::new(wu_s, &Template::UnitCircle),
-        ) {
-            (Ok(a), Ok(b), Ok(c)) => (a, b, c),
-            _ => panic!("bad settings"),
-        };
+        let (od, wu, occ) = models(lines);
         let mut ws = match od.workspace() {
             Ok(ws) => ws,
             Err(e) => panic!("{e}"),

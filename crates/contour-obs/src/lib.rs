@@ -10,9 +10,9 @@
 //!   normals, sampled by bilinear interpolation, with the edges of [`EdgeDetector`]. It is the
 //!   reusable workspace of every likelihood (no allocation per hypothesis or per line).
 //! - [`OdobezLikelihood`]: Odobez Eq. 19. [`WuLikelihood`]: Wu Eq. 1–6 with the (λL)^m Poisson
-//!   term of MODELS.md; per-line pieces by [`WuLikelihood::line_terms`]. [`OcclusionLikelihood`]:
-//!   Wu Eq. 11–12. All in logs, finite for lines without edges, contours leaving the image and
-//!   λ → 0; each has a batch form over many poses on one frame.
+//!   term of docs/MODELS.md; per-line pieces by [`WuLikelihood::line_terms`].
+//!   [`OcclusionLikelihood`]: Wu Eq. 11–12. All in logs, finite for lines without edges, contours
+//!   leaving the image and λ → 0; each has a batch form over many poses on one frame.
 //! - [`learn_clutter`]: Wu §6.1, random lines + k-means → [`ClutterModel`].
 //!
 //! Speed (the trackers evaluate hundreds of hypotheses per frame): the edge definition is the

@@ -191,7 +191,7 @@ impl LineModel {
         }
     }
 
-    /// ln N(m(L); λ) with mean μ = λ·length (MODELS.md: (λL)^m e^{−λL}/m!), and the target's
+    /// ln N(m(L); λ) with mean μ = λ·length (docs/MODELS.md: (λL)^m e^{−λL}/m!), and the target's
     /// mixture X (see the type docs), `None` for an empty window (X = `x_empty`).
     #[inline]
     fn split(&self, edges: &[f64], length: f64, density: &Density) -> (f64, Option<f64>) {

@@ -103,7 +103,7 @@ impl ConfigFile for ClutterConfig {
 pub struct ClutterState {
     /// Clutter class, `0..n_classes`.
     pub beta: usize,
-    /// Poisson clutter density per pixel (Wu Eq. 1 with MODELS.md's `λL`).
+    /// Poisson clutter density per pixel (Wu Eq. 1 with docs/MODELS.md's `λL`).
     pub lambda: f64,
 }
 

@@ -9,7 +9,7 @@
 //! - [`OcclusionProcess`]: occlusion degree `γ ∈ [0, 1]`, a Gaussian random walk with the mass
 //!   beyond the bounds on the bounds (Eq. 13), `γ̂ = E[γ]` (Eq. 14).
 //! - [`StatusHmm`]: tracker status `α ∈ {locked, partially occluded, lost}` with `T_α` (§6.3)
-//!   emitting `γ | α ~ U[a_α, b_α]` (Fig. 9), with MODELS.md's fix `[0.1, 0.9]` for
+//!   emitting `γ | α ~ U[a_α, b_α]` (Fig. 9), with docs/MODELS.md's fix `[0.1, 0.9]` for
 //!   "partially occluded".
 //!
 //! Each process has a state type, `sample_next(previous, rng)` and `log_transition(previous,

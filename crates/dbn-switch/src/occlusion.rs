@@ -1,6 +1,6 @@
 //! The occlusion process of Wu et al. §5: `γ_t ∈ [0, 1]` follows a Gaussian random walk with
-//! deviation `σ_γ` whose mass beyond the bounds is put on the bounds (Eq. 13, as MODELS.md reads
-//! it), and is estimated by its posterior mean (Eq. 14).
+//! deviation `σ_γ` whose mass beyond the bounds is put on the bounds (Eq. 13, as docs/MODELS.md
+//! reads it), and is estimated by its posterior mean (Eq. 14).
 //!
 //! The transition law therefore has two atoms, at 0 and 1, and a Gaussian density in between.
 //! [`OcclusionProcess::log_transition`] returns its density with respect to the measure

@@ -3,8 +3,8 @@
 //! occlusion degree `γ | α ~ U[a_α, b_α]`. Inferring `α` gives the tracker a rough online
 //! self-evaluation.
 //!
-//! Wu prints `a₂ = 1, b₂ = 0.9` for "partially occluded", an empty interval; MODELS.md settles it
-//! as `[0.1, 0.9]`, which is the default here. Reversed ranges are rejected by validation.
+//! Wu prints `a₂ = 1, b₂ = 0.9` for "partially occluded", an empty interval; docs/MODELS.md settles
+//! it as `[0.1, 0.9]`, which is the default here. Reversed ranges are rejected by validation.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -86,7 +86,7 @@ impl GammaRange {
     }
 }
 
-/// Settings of the status HMM. The default is Wu §6.3 with MODELS.md's fix.
+/// Settings of the status HMM. The default is Wu §6.3 with docs/MODELS.md's fix.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StatusConfig {
@@ -95,7 +95,7 @@ pub struct StatusConfig {
     pub transition: Vec<Vec<f64>>,
     /// `[a₁, b₁]`, default `[0, 0.2]`.
     pub locked: GammaRange,
-    /// `[a₂, b₂]`, default `[0.1, 0.9]` (MODELS.md; Wu's printed `[1, 0.9]` is a typo).
+    /// `[a₂, b₂]`, default `[0.1, 0.9]` (docs/MODELS.md; Wu's printed `[1, 0.9]` is a typo).
     pub partially_occluded: GammaRange,
     /// `[a₃, b₃]`, default `[0.8, 1]`.
     pub lost: GammaRange,

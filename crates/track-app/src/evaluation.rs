@@ -148,8 +148,8 @@ pub struct Table1Column {
     pub particles: usize,
 }
 
-/// Odobez Table 1's columns (MODELS.md): D1 (2, 0.01), D2 (3, 0.01), D3 (5, 0.01), D4 (8, 0.02)
-/// with 500 particles; S1, S2 = (5, 0.01) with 250 and 100.
+/// Odobez Table 1's columns (docs/MODELS.md): D1 (2, 0.01), D2 (3, 0.01), D3 (5, 0.01), D4 (8,
+/// 0.02) with 500 particles; S1, S2 = (5, 0.01) with 250 and 100.
 pub const TABLE1_COLUMNS: [Table1Column; 6] = [
     Table1Column {
         name: "D1",
@@ -211,7 +211,8 @@ pub struct Table1Row {
     pub fps: Vec<f64>,
 }
 
-/// Whether one trial failed (MODELS.md: IoU below 0.2 for 5 consecutive frames), and its speed.
+/// Whether one trial failed (docs/MODELS.md: IoU below 0.2 for 5 consecutive frames), and its
+/// speed.
 ///
 /// # Errors
 /// A tracker failure.

@@ -1,6 +1,6 @@
 //! Target boxes and ellipses, and the OTB ground-truth file `groundtruth_rect.txt`.
 //!
-//! The OTB layout (MODELS.md, "Evaluation protocol") has one line per frame, `x,y,w,h` of the
+//! The OTB layout (docs/MODELS.md, "Evaluation protocol") has one line per frame, `x,y,w,h` of the
 //! target's axis-aligned box (top-left corner, width, height, in pixels), separated by commas, tabs
 //! or spaces. Some sequences label only every k-th frame and write `0,0,0,0` elsewhere; those frames
 //! are unlabelled ([`None`]) and left out of every metric.
@@ -63,7 +63,7 @@ impl Box2 {
     }
 
     /// The ellipse inscribed in the box: centre at the box centre, semi-axes `a = w/2` (horizontal)
-    /// and `b = h/2`, angle 0 (MODELS.md: the tracker starts from the ellipse inscribed in the
+    /// and `b = h/2`, angle 0 (docs/MODELS.md: the tracker starts from the ellipse inscribed in the
     /// first labelled box).
     pub fn inscribed_ellipse(&self) -> Ellipse {
         let (cx, cy) = self.centre();
@@ -158,7 +158,7 @@ impl Ellipse {
             && self.angle.is_finite()
     }
 
-    /// The axis-aligned bounding box of the rotated ellipse (the tracker's box, MODELS.md).
+    /// The axis-aligned bounding box of the rotated ellipse (the tracker's box, docs/MODELS.md).
     /// Half-extents: `sqrt(a²cos²θ + b²sin²θ)` and `sqrt(a²sin²θ + b²cos²θ)`.
     pub fn bounding_box(&self) -> Box2 {
         let (s, c) = self.angle.sin_cos();

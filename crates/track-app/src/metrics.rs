@@ -1,4 +1,4 @@
-//! The evaluation protocol of MODELS.md ("Evaluation protocol", after O Table 1).
+//! The evaluation protocol of docs/MODELS.md ("Evaluation protocol", after O Table 1).
 //!
 //! - Centre error: distance between the centres of the estimated and the true box, in pixels.
 //! - Precision at 20 px: share of labelled frames whose centre error is at most 20 px.

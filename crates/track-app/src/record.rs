@@ -59,7 +59,7 @@ pub struct FrameRecord {
     pub frame: usize,
     /// The estimated contour as an ellipse.
     pub ellipse: Ellipse,
-    /// Its axis-aligned bounding box (the tracker's box, MODELS.md).
+    /// Its axis-aligned bounding box (the tracker's box, docs/MODELS.md).
     pub bbox: Box2,
     /// Effective sample size of the weights before resampling.
     pub ess: f64,
