@@ -7,7 +7,7 @@ use crate::{Error, Result};
 
 /// State derivative and its covariance from affine parameters `[a1..a6]` (Odobez Eq. 13, origin at
 /// the object centre) and their covariance, for the current scale `s` and eccentricity `e`
-/// (MODELS.md): Ṫx = a1, Ṫy = a4, ṡ = s (a2·e + a6)/(1 + e), ė = e (a2 − a6). The map is linear in
+/// (docs/MODELS.md): Ṫx = a1, Ṫy = a4, ṡ = s (a2·e + a6)/(1 + e), ė = e (a2 − a6). The map is linear in
 /// the parameters, so the propagated covariance J Σ Jᵀ is exact. Cost: a few dozen flops.
 ///
 /// # Errors

@@ -305,7 +305,7 @@ pub const UNKNOWN_OCCLUDER_SHARE: f64 = 0.5;
 /// 0.910 → 0.914; and γ̂ now rises while the target is hidden (docs/RESULTS.md).
 pub const OCCLUSION_ARC: bool = true;
 
-/// σ_γ of w-occ's random-walk γ (Wu §6.2 and MODELS.md: 0.1). w-occ reads γ through the
+/// σ_γ of w-occ's random-walk γ (Wu §6.2 and docs/MODELS.md: 0.1). w-occ reads γ through the
 /// occlusion arc ([`OCCLUSION_ARC`]) and has the reacquisition jump, as w-eval; with σ_γ = 0.1 a
 /// random walk is too slow to follow a target that slides behind an occluder in 20 frames, and
 /// the contour shrinks onto the visible sliver instead. Measured (sweep, 120 frames, 200
