@@ -34,7 +34,7 @@ use crate::pyramid::{Level, Pyramid, Window};
 use crate::region::{PixelBox, Region};
 use crate::robust::{RobustFunction, lower_quartile, robust_scale_from};
 use crate::simd::simd;
-use crate::{Error, Result, restart};
+use crate::{Error, Result, occlusion, restart};
 
 pub(crate) type Mat7 = SMatrix<f64, 7, 7>;
 type Vec7 = SVector<f64, 7>;
@@ -79,9 +79,11 @@ pub struct Settings {
     /// The least inlier fraction of a re-started estimate that is reliable as the largest group
     /// (default 0.4): when the first fit is not reliable, the estimator re-starts from the
     /// motions that blocks of the region agree on and keeps the fit explaining most pixels; that
-    /// fit is reliable below [`min_inlier_fraction`](Self::min_inlier_fraction) when it explains
-    /// at least this share (a block moving by a few pixels covers and uncovers pixels that no
-    /// motion explains, so the background of a 47 % block explains only 40–50 %).
+    /// fit is reliable below [`min_inlier_fraction`](Self::min_inlier_fraction) when its inlier
+    /// fraction, plus the share of pixels that a surface in front of it covers in the second
+    /// frame (when the order of the surfaces can be told), reaches this share. A block moving
+    /// by a few pixels covers and uncovers pixels that no motion explains, so the dominant
+    /// motion may explain less than half of the region.
     #[serde(default = "default_min_plurality_fraction")]
     pub min_plurality_fraction: f64,
     /// Ceiling on the scale of the IRLS weights at the two finest levels, grey levels (default
@@ -216,10 +218,12 @@ pub struct MotionEstimate {
     /// in the image, and that noise scale is at most twice [`Settings::max_scale`] (a larger one
     /// means that no group of pixels fits at the noise level: the fit sits between motions, and
     /// its inlier fraction is then high only because the scale measures the misfit). After a
-    /// re-start from the motions that blocks of the region agree on, the fit explaining most pixels is also reliable from
-    /// [`Settings::min_plurality_fraction`] of them. `false` when the dominant motion could not be separated from the rest (a
-    /// compromise between motions, or a motion of a minority): treat the estimate as failed; its
-    /// parameters and covariance do not describe the region's motion.
+    /// re-start from the motions that blocks of the region agree on, the fit explaining most
+    /// pixels is also reliable from [`Settings::min_plurality_fraction`] of them, counting the pixels
+    /// that a surface in front of it covers in the second frame. `false` when the dominant
+    /// motion could not be separated from the rest (a compromise between motions, or a motion
+    /// of a minority): treat the estimate as failed; its parameters and covariance do not
+    /// describe the region's motion.
     #[serde(default)]
     pub reliable: bool,
 }
@@ -522,8 +526,10 @@ impl MotionEstimator {
 
     /// [`estimate_from`](Self::estimate_from) on the calling thread: one coarse-to-fine fit, and
     /// when it is not [`reliable`](MotionEstimate::reliable), re-starts from the motions that
-    /// blocks of the region agree on (see [`crate::restart`]); the reliable fit explaining most
-    /// pixels is kept, and the first fit, flagged, when none is.
+    /// blocks of the region agree on (see [`crate::restart`]); the fit explaining most of the
+    /// region's pixels, counting those a surface in front of it covers (see
+    /// [`select`](Self::select)), is kept, and the first fit, flagged, when none can be
+    /// compared.
     #[allow(clippy::too_many_arguments)]
     fn estimate_from_here(
         &self,
@@ -583,41 +589,24 @@ impl MotionEstimator {
                 fits.push(next);
             }
         }
-        // The fits are compared by the pixels they explain within one threshold, c times the
-        // smallest noise scale among the fits that converged at a noise scale: a fit between two
-        // close motions has a larger scale of its own and, at it, would count pixels of both.
-        let usable = |f: &(MotionEstimate, f64, bool)| f.0.reliable || f.2;
-        let s_min = fits
-            .iter()
-            .filter(|f| usable(f))
-            .map(|f| f.0.scale)
-            .min_by(f64::total_cmp);
-        if let (Some(s_min), Some(l0), Some(l1)) = (s_min, pyramid0.level(0), pyramid1.level(0)) {
-            let t = self.settings.robust.c() * s_min;
-            for f in fits.iter_mut() {
-                f.1 = support_at(ws, l0, l1, region, bbox, &f.0, t);
-            }
-        }
-        // No usable fit: the first one, flagged.
-        let mut best = 0;
-        for (k, f) in fits.iter().enumerate() {
-            if usable(f) && (!usable(&fits[best]) || f.1 > fits[best].1) {
-                best = k;
-            }
-        }
+        let (best, share) = match (pyramid0.level(0), pyramid1.level(0)) {
+            (Some(l0), Some(l1)) => self.select(ws, l0, l1, region, bbox, &fits),
+            _ => (0, 0.0),
+        };
         let best = fits.swap_remove(best);
         // The fit explaining most pixels among the motions the blocks agree on is the dominant
         // one even below a majority (part of the region may be explained by no motion: pixels
-        // that a moving block covers or uncovers).
-        let (mut est, _, plural) = best;
-        if plural && est.inlier_fraction >= self.settings.min_plurality_fraction {
+        // that a moving block covers or uncovers). The pixels it loses to a surface in front of
+        // it count as its own.
+        let (mut est, plural) = best;
+        if plural && est.inlier_fraction + share >= self.settings.min_plurality_fraction {
             est.reliable = true;
         }
         Ok(est)
     }
 
-    /// One coarse-to-fine fit; also returns the weight of the pixels it explains at the noise
-    /// scale (the numerator of [`MotionEstimate::inlier_fraction`]).
+    /// One coarse-to-fine fit; also returns whether it converged at a noise scale (at most twice
+    /// [`Settings::max_scale`]), which lets it take part in the choice among re-start fits.
     #[allow(clippy::too_many_arguments)]
     fn estimate_once(
         &self,
@@ -628,7 +617,7 @@ impl MotionEstimator {
         origin: Option<[f64; 2]>,
         initial: Option<&[f64]>,
         ws: &mut Workspace,
-    ) -> Result<(MotionEstimate, f64, bool)> {
+    ) -> Result<(MotionEstimate, bool)> {
         let st = &self.settings;
         if let Some(p) = initial {
             if p.len() != spec.len() {
@@ -843,7 +832,7 @@ impl MotionEstimator {
                 && s <= 2.0 * st.max_scale,
         };
         let honest = converged && s <= 2.0 * st.max_scale;
-        Ok((est, cov.support, honest))
+        Ok((est, honest))
     }
 }
 
@@ -870,6 +859,175 @@ fn support_at(
         .filter(|((r, v), _)| **v != 0 && f64::from(r.abs()) < t)
         .map(|(_, m)| f64::from(*m))
         .sum()
+}
+
+impl MotionEstimator {
+    /// Chooses among the fits of a re-start: returns the index of the dominant motion's fit and
+    /// the share of the region's pixels it loses to a surface in front of it (0 when no order
+    /// can be told). Only fits that are reliable or converged at a noise scale (the second
+    /// field) take part; with none, the first fit is returned.
+    ///
+    /// The fits are compared by the weight of the pixels each explains within one threshold, c
+    /// times the smallest noise scale among them (a fit between two close motions has a larger
+    /// scale of its own and, at it, would count pixels of both), plus the pixels it loses to a
+    /// surface in front of it when the order of the two can be told (see [`crate::occlusion`]).
+    /// The first fit with the largest total wins.
+    fn select(
+        &self,
+        ws: &mut Workspace,
+        l0: &Level,
+        l1: &Level,
+        region: &Region<'_>,
+        bbox: PixelBox,
+        fits: &[(MotionEstimate, bool)],
+    ) -> (usize, f64) {
+        let usable: Vec<bool> = fits.iter().map(|f| f.0.reliable || f.1).collect();
+        let Some(s_min) = fits
+            .iter()
+            .zip(&usable)
+            .filter(|&(_, &u)| u)
+            .map(|(f, _)| f.0.scale)
+            .min_by(f64::total_cmp)
+        else {
+            return (0, 0.0);
+        };
+        let t = self.settings.robust.c() * s_min;
+        let support: Vec<f64> = fits
+            .iter()
+            .zip(&usable)
+            .map(|(f, &u)| {
+                if u {
+                    support_at(ws, l0, l1, region, bbox, &f.0, t)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let ests: Vec<&MotionEstimate> = fits.iter().map(|f| &f.0).collect();
+        let hidden = self.occluded(ws, l0, l1, region, bbox, &ests, &usable, t);
+        let credit = |k: usize| {
+            hidden[k].iter().fold(
+                (0.0, 0.0),
+                |a: (f64, f64), h| if h.0 > a.0 { *h } else { a },
+            )
+        };
+        let mut best: Option<usize> = None;
+        for k in (0..fits.len()).filter(|&k| usable[k]) {
+            let total = support[k] + credit(k).0;
+            if best.is_none_or(|b| total > support[b] + credit(b).0) {
+                best = Some(k);
+            }
+        }
+        best.map_or((0, 0.0), |b| (b, credit(b).1))
+    }
+
+    /// For each pair of fits (x, y), the weight of the region's pixels x fails on because the
+    /// surface moving by y covers them in the second frame, when x encloses y (see
+    /// [`crate::occlusion`]), and that weight as a share of the region's pixels x keeps in the
+    /// image; zeros otherwise. The surroundings are the region's box grown by
+    /// [`Settings::margin`] within the first frame's window; a region that fills that box has
+    /// none. Only `usable` fits take part; `t` is the threshold on |DFD| (grey levels).
+    #[allow(clippy::too_many_arguments)]
+    fn occluded(
+        &self,
+        ws: &mut Workspace,
+        l0: &Level,
+        l1: &Level,
+        region: &Region<'_>,
+        bbox: PixelBox,
+        fits: &[&MotionEstimate],
+        usable: &[bool],
+        t: f64,
+    ) -> Vec<Vec<(f64, f64)>> {
+        let mut out = vec![vec![(0.0, 0.0); fits.len()]; fits.len()];
+        let margin = self.settings.margin;
+        let cbox = PixelBox {
+            i0: bbox.i0.saturating_sub(margin).max(l0.x0),
+            j0: bbox.j0.saturating_sub(margin).max(l0.y0),
+            i1: (bbox.i1 + margin).min(l0.x0 + l0.width - 1),
+            j1: (bbox.j1 + margin).min(l0.y0 + l0.height - 1),
+        };
+        if cbox.i0 > cbox.i1 || cbox.j0 > cbox.j1 || usable.iter().filter(|&&u| u).count() < 2 {
+            return out;
+        }
+        let test = RowTest::new(region);
+        let mut weight = Vec::with_capacity((cbox.i1 + 1 - cbox.i0) * (cbox.j1 + 1 - cbox.j0));
+        for j in cbox.j0..=cbox.j1 {
+            weight.extend((cbox.i0..=cbox.i1).map(|i| test.weight(i, j)));
+        }
+        if weight.iter().all(|&w| w > 0.0) {
+            return out;
+        }
+        let labels: Vec<Option<occlusion::Labels>> = fits
+            .iter()
+            .zip(usable)
+            .map(|(f, &u)| u.then(|| context_labels(ws, l0, l1, cbox, f, t)))
+            .collect();
+        let motion = |f: &MotionEstimate| occlusion::Motion {
+            a: f.affine(),
+            o: f.origin,
+        };
+        for (x, lx) in labels.iter().enumerate() {
+            let Some(lx) = lx else { continue };
+            let total: f64 = weight
+                .iter()
+                .zip(&lx.label)
+                .filter(|&(_, &l)| l != occlusion::UNUSED)
+                .map(|(&w, _)| f64::from(w))
+                .sum();
+            for (y, ly) in labels.iter().enumerate() {
+                let Some(ly) = ly else { continue };
+                if x == y || total <= 0.0 || !occlusion::surrounds(lx, ly, &weight) {
+                    continue;
+                }
+                let h = occlusion::hidden(lx, &motion(fits[x]), ly, &motion(fits[y]), &weight);
+                out[x][y] = (h, h / total);
+            }
+        }
+        out
+    }
+}
+
+/// What `est` does at each pixel of `cbox` (level 0): explains it (|DFD| < `t`), fails, or
+/// sends it outside the second frame's window (or the pixel is outside the first's).
+fn context_labels(
+    ws: &mut Workspace,
+    l0: &Level,
+    l1: &Level,
+    cbox: PixelBox,
+    est: &MotionEstimate,
+    t: f64,
+) -> occlusion::Labels {
+    let rect = Region::Rect {
+        x: cbox.i0 as f64,
+        y: cbox.j0 as f64,
+        width: (cbox.i1 + 1 - cbox.i0) as f64,
+        height: (cbox.j1 + 1 - cbox.j0) as f64,
+    };
+    let w = cbox.i1 + 1 - cbox.i0;
+    let mut label = vec![occlusion::UNUSED; w * (cbox.j1 + 1 - cbox.j0)];
+    ws.collect(l0, 0, &rect, cbox);
+    let mut theta = [0.0; 7];
+    let n = est.params.len().min(7);
+    theta[..n].copy_from_slice(&est.params[..n]);
+    ws.evaluate(l0, l1, est.spec, &theta, est.origin, true);
+    for sp in &ws.spans {
+        let row = (sp.j - cbox.j0) * w + (sp.i0 - cbox.i0);
+        for k in 0..sp.len {
+            let (r, v) = (ws.res[sp.k0 + k], ws.valid[sp.k0 + k]);
+            label[row + k] = if v == 0 {
+                occlusion::UNUSED
+            } else if f64::from(r.abs()) < t {
+                occlusion::EXPLAINS
+            } else {
+                occlusion::FAILS
+            };
+        }
+    }
+    occlusion::Labels {
+        b: Some(cbox),
+        label,
+    }
 }
 
 /// The fewest blocks that make a starting motion of a re-start (see [`crate::restart`]).
@@ -1111,8 +1269,6 @@ struct CovarianceOut {
     matrix: Mat7,
     noise_sigma: f64,
     inlier_fraction: f64,
-    /// The weight of the inliers (numerator of the fraction).
-    support: f64,
 }
 
 /// Per-row candidate ranges and a trig-free weight test for [`Workspace::collect`]. The weight is
@@ -1957,7 +2113,6 @@ impl Workspace {
             matrix: cov,
             noise_sigma: noise_var.sqrt(),
             inlier_fraction,
-            support: m_in,
         })
     }
 

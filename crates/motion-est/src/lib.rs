@@ -46,6 +46,7 @@ pub mod estimator;
 pub mod image;
 mod meat;
 pub mod model;
+mod occlusion;
 pub mod odobez;
 pub mod patch;
 pub mod pyramid;

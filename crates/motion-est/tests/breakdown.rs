@@ -340,17 +340,20 @@ fn check_grid(scene: &Scene, label: &str, cases: &[(usize, f64)], seed: u64, dra
 
 #[test]
 fn region_64_breakdown_grid() {
-    // 25, 32 and 39 % of the 4096 pixels: no failure (the issue's bound). 47 %: the issue asks for
-    // at most 1 in 12, not met. In 12 of 48 runs (a different texture moving by 5–10 px relative)
-    // the block explains more pixels than the background, whose pixels that the block covers in
-    // the second frame fit no motion, and the estimator reports the block's motion (unflagged, as
-    // the dominant one by pixel count); 3 more are flagged. The bound here is what is measured
-    // (15 of 48), as a regression bound.
+    // 25, 32 and 39 % of the 4096 pixels: no failure; 47 %: at most 1 in 12 (the issue's bounds).
+    // At 47 % a different texture moving by 5–10 px relative to the background explains more
+    // pixels than the background, whose pixels that the block covers in the second frame fit no
+    // motion; the estimator counts those for the background, the surface behind (see
+    // `src/occlusion.rs`). `BREAKDOWN_SEED=N` runs the grid on other texture and noise draws.
+    let seed = std::env::var("BREAKDOWN_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(16);
     check_grid(
         &REGION,
         "64×64",
-        &[(32, 0.0), (36, 0.0), (40, 0.0), (44, 16.0 / 48.0)],
-        16,
+        &[(32, 0.0), (36, 0.0), (40, 0.0), (44, 1.0 / 12.0)],
+        seed,
         DRAWS,
     );
 }
