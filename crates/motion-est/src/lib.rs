@@ -56,7 +56,7 @@ pub mod robust;
 mod simd;
 
 pub use error::{Error, Result};
-pub use estimator::{FrameBuffers, MotionEstimate, MotionEstimator, Settings, Workspace};
+pub use estimator::{FrameBuffers, MotionEstimate, MotionEstimator, Request, Settings, Workspace};
 pub use image::ImageView;
 pub use model::{ModelSpec, MotionModel};
 pub use odobez::odobez_state_derivative;
