@@ -93,6 +93,11 @@ impl SyntheticSequence {
     /// # Errors
     /// An invalid configuration or a tracker failure.
     pub fn track(&self, config: TrackerConfig, draw: Option<DrawOptions>) -> Result<SessionOutput> {
+        Ok(self.session(config, draw)?.finish())
+    }
+
+    /// A session of `config` that has tracked every frame, not yet finished.
+    fn session(&self, config: TrackerConfig, draw: Option<DrawOptions>) -> Result<Session> {
         let init = self.initial_ellipse()?;
         let tracker =
             trackers::build(config).map_err(|e| AppError::setting("tracker", e.to_string()))?;
@@ -100,7 +105,7 @@ impl SyntheticSequence {
         for (k, f) in self.frames.iter().enumerate() {
             session.push(f, &init, self.truth_box(k))?;
         }
-        Ok(session.finish())
+        Ok(session)
     }
 
     /// Tracks the whole sequence with `config` recording its particles, and smooths the run:
@@ -114,13 +119,7 @@ impl SyntheticSequence {
         smoother: &SmootherSettings,
     ) -> Result<(SessionOutput, Vec<FrameRecord>, SwitchingStatistics)> {
         config.filter.history = Some(Default::default());
-        let init = self.initial_ellipse()?;
-        let tracker =
-            trackers::build(config).map_err(|e| AppError::setting("tracker", e.to_string()))?;
-        let mut session = Session::new(tracker, None);
-        for (k, f) in self.frames.iter().enumerate() {
-            session.push(f, &init, self.truth_box(k))?;
-        }
+        let mut session = self.session(config, None)?;
         let (smoothed, statistics) = session.smoothed(smoother)?;
         Ok((session.finish(), smoothed, statistics))
     }

@@ -360,7 +360,24 @@ impl ParticleTracker {
                 (Some(e.gamma_hat), Some(e))
             }
         };
-        let class = match (self.config.estimator, &clutter) {
+        let mean = self.pose_mean(states, weights, clutter.as_ref())?;
+        Ok(PosteriorSummary {
+            state: mean,
+            clutter,
+            gamma,
+            status,
+        })
+    }
+
+    /// The reported pose: the weighted mean of the states, or with
+    /// [`PoseEstimator::ClassConditionalMean`] the mean of the particles of class β̂ (Wu §4).
+    fn pose_mean(
+        &self,
+        states: &[Particle],
+        weights: &[f64],
+        clutter: Option<&ClutterEstimate>,
+    ) -> Result<StateVector> {
+        let class = match (self.config.estimator, clutter) {
             (PoseEstimator::ClassConditionalMean, Some(c)) => Some(c.beta_hat),
             _ => None,
         };
@@ -381,12 +398,7 @@ impl ParticleTracker {
         for v in &mut mean {
             *v /= mass;
         }
-        Ok(PosteriorSummary {
-            state: mean,
-            clutter,
-            gamma,
-            status,
-        })
+        Ok(mean)
     }
 
     fn report(&self, state: StateVector, millis: f64) -> Result<Estimate> {
@@ -666,7 +678,7 @@ impl Tracker for ParticleTracker {
     }
 
     fn smoothed(&mut self, settings: &SmootherSettings) -> Result<SmoothedRun> {
-        let Some(history) = self.filter.history().cloned() else {
+        let Some(history) = self.filter.history() else {
             return Err(Error::InvalidSetting {
                 name: "filter.history",
                 reason: "the tracker records no particles: set filter.history to smooth".into(),
@@ -679,17 +691,19 @@ impl Tracker for ParticleTracker {
             });
         }
         let transition = crate::smoothing::PriorTransition::new(&self.dynamics);
-        let marginals = smooth_marginals(&history, &transition, settings)?;
-        let (hidden, statistics) = crate::smoothing::smooth_hidden(&self.dynamics, &history)?;
+        let marginals = smooth_marginals(history, &transition, settings)?;
+        let (hidden, statistics) = crate::smoothing::smooth_hidden(&self.dynamics, history)?;
         let estimates = hidden
             .into_iter()
+            .zip(history.frames())
             .enumerate()
-            .map(|(t, h)| {
-                let set = marginals.to_particle_set(&history, t)?;
-                let state = self.estimate(&set)?.state;
+            .map(|(t, (h, frame))| {
+                let weights = marginals.weights(t).unwrap_or_default();
+                // The pose of the smoothed class β̂, as the filter takes its own.
+                let state = self.pose_mean(frame.set.states(), weights, h.clutter.as_ref())?;
                 let mut e = self.report(state, 0.0)?;
-                e.frame = history.frame(t).map_or(t + 1, |f| f.step as usize);
-                e.ess = set.ess();
+                e.frame = frame.step as usize;
+                e.ess = smc_core::weights::effective_sample_size(weights);
                 e.clutter = h.clutter;
                 e.gamma = h.gamma;
                 e.status = h.status;
