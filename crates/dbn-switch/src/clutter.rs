@@ -230,6 +230,23 @@ impl ClutterHmm {
         }
     }
 
+    /// [`Self::sample_next`] with `β'` drawn from the defensive mixture of
+    /// [`MarkovChain::sample_next_exploring`] (identical to it for `ε = 0`).
+    pub fn sample_next_exploring<R: Rng + ?Sized>(
+        &self,
+        previous: &ClutterState,
+        exploration: f64,
+        rng: &mut R,
+    ) -> ClutterState {
+        let beta = self
+            .chain
+            .sample_next_exploring(previous.beta, exploration, rng);
+        ClutterState {
+            beta,
+            lambda: self.sample_lambda(beta, rng),
+        }
+    }
+
     /// `ln p(β', λ' | β) = ln T_β[β][β'] + ln p(λ' | β')`, the density of [`Self::sample_next`]
     /// with respect to counting measure on `β` times Lebesgue measure on `λ` (a Dirac in `λ`
     /// for [`LambdaModel::Fixed`], see [`Self::log_lambda_density`]).

@@ -86,6 +86,34 @@ impl MarkovChain {
         }
     }
 
+    /// Draws the next state from the defensive mixture `q = (1 − ε)·T[previous] + ε·uniform`, a
+    /// proposal that keeps exploring every state however sticky `T` is; with `ε = 0` it draws
+    /// nothing more than [`Self::sample_next`]. Weight by [`Self::log_exploration_ratio`].
+    pub fn sample_next_exploring<R: Rng + ?Sized>(
+        &self,
+        previous: usize,
+        exploration: f64,
+        rng: &mut R,
+    ) -> usize {
+        if exploration > 0.0 && rng.random::<f64>() < exploration {
+            rng.random_range(0..self.n)
+        } else {
+            self.sample_next(previous, rng)
+        }
+    }
+
+    /// `ln T[previous][next] − ln q(next | previous)`, the importance ratio of a state drawn by
+    /// [`Self::sample_next_exploring`] with the same `ε` (0 when `ε = 0`).
+    #[must_use]
+    pub fn log_exploration_ratio(&self, previous: usize, next: usize, exploration: f64) -> f64 {
+        if exploration <= 0.0 {
+            return 0.0;
+        }
+        let p = self.log_transition(previous, next);
+        let q = ((1.0 - exploration) * p.exp() + exploration / self.n as f64).ln();
+        p - q
+    }
+
     /// `ln p(next | previous)`; `−∞` for an impossible transition or a `next` out of range, and
     /// `−ln n` for a `previous` out of range (see [`Self::sample_next`]).
     #[must_use]
@@ -237,6 +265,65 @@ mod tests {
     use approx::assert_relative_eq;
     use rand::SeedableRng;
     use rand_pcg::Pcg64Mcg;
+
+    #[test]
+    fn exploring_draws_weighted_by_their_ratio_recover_the_transition_row() {
+        // A sticky chain: q = (1 − ε) T + ε/n visits every state, and the importance weights
+        // T / q bring the weighted frequencies back to T's row, on each of several draws.
+        let chain = MarkovChain::new(&[
+            vec![0.98, 0.02, 0.0],
+            vec![0.01, 0.98, 0.01],
+            vec![0.0, 0.03, 0.97],
+        ])
+        .unwrap();
+        let (n, eps) = (200_000, 0.2);
+        for seed in [1, 2, 3] {
+            let mut rng = Pcg64Mcg::seed_from_u64(seed);
+            for previous in 0..3 {
+                let (mut visits, mut weighted, mut total) = ([0usize; 3], [0.0; 3], 0.0);
+                for _ in 0..n {
+                    let next = chain.sample_next_exploring(previous, eps, &mut rng);
+                    let w = chain.log_exploration_ratio(previous, next, eps).exp();
+                    visits[next] += 1;
+                    weighted[next] += w;
+                    total += w;
+                }
+                for j in 0..3 {
+                    let q = (1.0 - eps) * chain.prob(previous, j) + eps / 3.0;
+                    let freq = visits[j] as f64 / n as f64;
+                    // Binomial sd at most sqrt(0.25 / n) ≈ 0.0011: 5 sd.
+                    assert!(
+                        (freq - q).abs() < 0.0056,
+                        "seed {seed} {previous}→{j}: {freq} vs q {q}"
+                    );
+                    let p = weighted[j] / total;
+                    assert!(
+                        (p - chain.prob(previous, j)).abs() < 0.0056,
+                        "seed {seed} {previous}→{j}: weighted {p} vs T {}",
+                        chain.prob(previous, j)
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn exploration_zero_draws_as_the_chain_and_weighs_nothing() {
+        let chain = MarkovChain::new(&[vec![0.9, 0.1], vec![0.2, 0.8]]).unwrap();
+        let mut a = Pcg64Mcg::seed_from_u64(7);
+        let mut b = Pcg64Mcg::seed_from_u64(7);
+        for step in 0..1000 {
+            let previous = step % 2;
+            assert_eq!(
+                chain.sample_next_exploring(previous, 0.0, &mut a),
+                chain.sample_next(previous, &mut b)
+            );
+            assert_eq!(
+                chain.log_exploration_ratio(previous, 1 - previous, 0.0),
+                0.0
+            );
+        }
+    }
 
     #[test]
     fn invalid_matrices_are_rejected_with_the_right_error() {

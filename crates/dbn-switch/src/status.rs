@@ -282,6 +282,29 @@ impl StatusHmm {
         }
     }
 
+    /// [`Self::sample_next`] with `α'` drawn from the defensive mixture of
+    /// [`MarkovChain::sample_next_exploring`] (identical to it for `ε = 0`).
+    pub fn sample_next_exploring<R: Rng + ?Sized>(
+        &self,
+        previous: &StatusState,
+        exploration: f64,
+        rng: &mut R,
+    ) -> StatusState {
+        if exploration <= 0.0 {
+            return self.sample_next(previous, rng);
+        }
+        let alpha = Status::from_index(self.chain.sample_next_exploring(
+            previous.alpha.index(),
+            exploration,
+            rng,
+        ))
+        .unwrap_or(previous.alpha);
+        StatusState {
+            alpha,
+            gamma: self.sample_gamma(alpha, rng),
+        }
+    }
+
     /// `ln p(α', γ' | α) = ln T_α[α][α'] − ln(b_α' − a_α')` when `γ' ∈ [a_α', b_α']`, else `−∞`.
     #[must_use]
     pub fn log_transition(&self, previous: &StatusState, next: &StatusState) -> f64 {

@@ -11,41 +11,17 @@
 //! update (a missing prior/proposal ratio, or a log-evidence that ignores the previous weights)
 //! misses it by far more.
 
-use std::f64::consts::PI;
+mod common;
 
+use common::{AR1, Ar1, ConstantVelocity, gauss, kalman_1d, kalman_2d, normal_log_pdf};
 use rand::Rng;
-use rand_distr::{Distribution, StandardNormal};
 use smc_core::estimate::{weighted_mean, weighted_mean_covariance};
 use smc_core::model::{Dynamics, FnObservation, Proposal};
 use smc_core::rng::stream_rng;
 use smc_core::{FilterSettings, ParticleFilter, ParticleSet, ResamplingScheme};
 
-fn normal_log_pdf(x: f64, mean: f64, var: f64) -> f64 {
-    -0.5 * ((x - mean).powi(2) / var + (2.0 * PI * var).ln())
-}
-
-fn gauss<R: Rng + ?Sized>(rng: &mut R) -> f64 {
-    StandardNormal.sample(rng)
-}
-
 // ---------------------------------------------------------------------------------------------
-// 1-D: x_k = a x_{k−1} + N(0, q), z_k = x_k + N(0, r), x_0 ~ N(m0, p0).
-
-#[derive(Clone, Copy)]
-struct Ar1 {
-    a: f64,
-    q: f64,
-}
-
-impl Dynamics for Ar1 {
-    type State = f64;
-    fn sample<R: Rng + ?Sized>(&self, x: &f64, rng: &mut R) -> f64 {
-        self.a * x + self.q.sqrt() * gauss(rng)
-    }
-    fn log_density(&self, x: &f64, y: &f64) -> f64 {
-        normal_log_pdf(*y, self.a * x, self.q)
-    }
-}
+// 1-D: the AR(1) model of `common`, observed with noise variance R_1D.
 
 /// A proposal that uses the measurement but is deliberately not the optimal one: it moves the
 /// prior mean half way towards z and inflates the variance. The weights must then carry the ratio
@@ -74,34 +50,7 @@ impl Proposal for TowardsMeasurement {
     }
 }
 
-struct Kalman1 {
-    means: Vec<f64>,
-    vars: Vec<f64>,
-    log_evidence: f64,
-}
-
-fn kalman_1d(model: Ar1, r: f64, m0: f64, p0: f64, zs: &[f64]) -> Kalman1 {
-    let (mut m, mut p) = (m0, p0);
-    let mut out = Kalman1 {
-        means: vec![],
-        vars: vec![],
-        log_evidence: 0.0,
-    };
-    for &z in zs {
-        m *= model.a;
-        p = model.a * model.a * p + model.q;
-        let s = p + r;
-        out.log_evidence += normal_log_pdf(z, m, s);
-        let k = p / s;
-        m += k * (z - m);
-        p *= 1.0 - k;
-        out.means.push(m);
-        out.vars.push(p);
-    }
-    out
-}
-
-const MODEL_1D: Ar1 = Ar1 { a: 0.9, q: 0.5 };
+const MODEL_1D: Ar1 = AR1;
 const R_1D: f64 = 0.3;
 const M0: f64 = 1.0;
 const P0: f64 = 2.0;
@@ -150,7 +99,7 @@ fn run_1d(n: usize, seed: u64, guided: bool, settings: FilterSettings) -> (f64, 
         };
         log_evidence += d.log_evidence_increment;
         let mean = weighted_mean(&set).unwrap()[0];
-        worst = worst.max((mean - exact.means[k]).abs() / exact.vars[k].sqrt());
+        worst = worst.max((mean - exact.means[k]).abs() / exact.covs[k].sqrt());
     }
     (worst, log_evidence - exact.log_evidence)
 }
@@ -192,106 +141,7 @@ fn guided_proposal_with_adaptive_resampling_matches_kalman_in_1d() {
 // 2-D constant velocity: x = (position, velocity), x_k = F x_{k−1} + w, w ~ N(0, Q),
 // z_k = position + N(0, r). Only the position is observed, so the velocity is inferred.
 
-const DT: f64 = 1.0;
-/// Q = σ² [[dt³/3, dt²/2], [dt²/2, dt]] (continuous white-noise acceleration), σ² = 0.2.
-const SIGMA2: f64 = 0.2;
 const R_2D: f64 = 1.0;
-
-fn q_matrix() -> [[f64; 2]; 2] {
-    [
-        [SIGMA2 * DT.powi(3) / 3.0, SIGMA2 * DT.powi(2) / 2.0],
-        [SIGMA2 * DT.powi(2) / 2.0, SIGMA2 * DT],
-    ]
-}
-
-struct ConstantVelocity {
-    /// Lower Cholesky factor of Q.
-    l: [[f64; 2]; 2],
-    q_inv: [[f64; 2]; 2],
-    log_norm: f64,
-}
-
-impl ConstantVelocity {
-    fn new() -> Self {
-        let q = q_matrix();
-        let l00 = q[0][0].sqrt();
-        let l10 = q[1][0] / l00;
-        let l11 = (q[1][1] - l10 * l10).sqrt();
-        let det = q[0][0] * q[1][1] - q[0][1] * q[1][0];
-        Self {
-            l: [[l00, 0.0], [l10, l11]],
-            q_inv: [
-                [q[1][1] / det, -q[0][1] / det],
-                [-q[1][0] / det, q[0][0] / det],
-            ],
-            log_norm: -(2.0 * PI).ln() - 0.5 * det.ln(),
-        }
-    }
-    fn predict(x: &[f64; 2]) -> [f64; 2] {
-        [x[0] + DT * x[1], x[1]]
-    }
-}
-
-impl Dynamics for ConstantVelocity {
-    type State = [f64; 2];
-    fn sample<R: Rng + ?Sized>(&self, x: &[f64; 2], rng: &mut R) -> [f64; 2] {
-        let (e0, e1) = (gauss(rng), gauss(rng));
-        let p = Self::predict(x);
-        [
-            p[0] + self.l[0][0] * e0,
-            p[1] + self.l[1][0] * e0 + self.l[1][1] * e1,
-        ]
-    }
-    fn log_density(&self, x: &[f64; 2], y: &[f64; 2]) -> f64 {
-        let p = Self::predict(x);
-        let d = [y[0] - p[0], y[1] - p[1]];
-        let qi = self.q_inv;
-        let quad =
-            d[0] * (qi[0][0] * d[0] + qi[0][1] * d[1]) + d[1] * (qi[1][0] * d[0] + qi[1][1] * d[1]);
-        self.log_norm - 0.5 * quad
-    }
-}
-
-struct Kalman2 {
-    means: Vec<[f64; 2]>,
-    covs: Vec<[[f64; 2]; 2]>,
-    log_evidence: f64,
-}
-
-fn kalman_2d(m0: [f64; 2], p0: [[f64; 2]; 2], zs: &[f64]) -> Kalman2 {
-    let q = q_matrix();
-    let (mut m, mut p) = (m0, p0);
-    let mut out = Kalman2 {
-        means: vec![],
-        covs: vec![],
-        log_evidence: 0.0,
-    };
-    for &z in zs {
-        // Predict: m = F m, P = F P Fᵀ + Q with F = [[1, dt], [0, 1]].
-        m = ConstantVelocity::predict(&m);
-        let fp = [
-            [p[0][0] + DT * p[1][0], p[0][1] + DT * p[1][1]],
-            [p[1][0], p[1][1]],
-        ];
-        p = [
-            [fp[0][0] + DT * fp[0][1] + q[0][0], fp[0][1] + q[0][1]],
-            [fp[1][0] + DT * fp[1][1] + q[1][0], fp[1][1] + q[1][1]],
-        ];
-        // Update with H = [1, 0].
-        let s = p[0][0] + R_2D;
-        out.log_evidence += normal_log_pdf(z, m[0], s);
-        let k = [p[0][0] / s, p[1][0] / s];
-        let innovation = z - m[0];
-        m = [m[0] + k[0] * innovation, m[1] + k[1] * innovation];
-        p = [
-            [p[0][0] - k[0] * p[0][0], p[0][1] - k[0] * p[0][1]],
-            [p[1][0] - k[1] * p[0][0], p[1][1] - k[1] * p[0][1]],
-        ];
-        out.means.push(m);
-        out.covs.push(p);
-    }
-    out
-}
 
 /// Runs the 2-D filter; returns the worst mean error (posterior sd units), the worst relative
 /// variance error, and the log-evidence error.
@@ -310,7 +160,7 @@ fn run_2d(n: usize, seed: u64) -> (f64, f64, f64) {
             x[0] + R_2D.sqrt() * gauss(&mut rng)
         })
         .collect();
-    let exact = kalman_2d(m0, p0, &zs);
+    let exact = kalman_2d(m0, p0, R_2D, &zs);
 
     let mut init = stream_rng(seed, u64::MAX, 0);
     let states = (0..n)

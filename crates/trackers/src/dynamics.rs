@@ -116,6 +116,14 @@ pub struct DynamicsSettings {
     /// so it stays off.
     #[serde(default)]
     pub shape_reversion: f64,
+    /// ε, the share of each particle's hidden-chain transitions (β, and α of the status HMM)
+    /// drawn uniformly over the states instead of from `T` (default 0: the papers' prior
+    /// proposal). A defensive proposal `q = (1 − ε)·T + ε·uniform`: the weight carries
+    /// `T / q` (Odobez Eq. 3), so the filter's target is unchanged, while a sticky `T` (a learnt
+    /// one, diagonal near 1) keeps particles in every class to switch to. See
+    /// [`TrackerDynamics::log_hidden_exploration_ratio`].
+    #[serde(default)]
+    pub hidden_exploration: f64,
 }
 
 impl Default for DynamicsSettings {
@@ -132,6 +140,7 @@ impl Default for DynamicsSettings {
             aspect_range: default_aspect_range(),
             locked_gamma_rate: 0.0,
             shape_reversion: 0.0,
+            hidden_exploration: 0.0,
         }
     }
 }
@@ -179,6 +188,12 @@ impl DynamicsSettings {
                     reason: format!("{v} must be in [0, 1]"),
                 });
             }
+        }
+        if !(0.0..1.0).contains(&self.hidden_exploration) {
+            return Err(Error::InvalidSetting {
+                name: "dynamics.hidden_exploration",
+                reason: format!("{} must be in [0, 1)", self.hidden_exploration),
+            });
         }
         if !(0.0..=1.0).contains(&self.shape_reversion) {
             return Err(Error::InvalidSetting {
@@ -371,7 +386,9 @@ impl TrackerDynamics {
                 beta: previous.clutter.beta,
                 lambda: *lambda,
             },
-            ClutterProcess::Switching(hmm) => hmm.sample_next(&previous.clutter, rng),
+            ClutterProcess::Switching(hmm) => {
+                hmm.sample_next_exploring(&previous.clutter, self.settings.hidden_exploration, rng)
+            }
         };
         next.status = match &self.occlusion {
             OcclusionModel::None => previous.status,
@@ -386,10 +403,42 @@ impl TrackerDynamics {
                     )
                     .gamma,
             },
-            OcclusionModel::Status(hmm) => {
-                self.locked_gamma(hmm, hmm.sample_next(&previous.status, rng))
+            OcclusionModel::Status(hmm) => self.locked_gamma(
+                hmm,
+                hmm.sample_next_exploring(&previous.status, self.settings.hidden_exploration, rng),
+            ),
+        };
+    }
+
+    /// ln p − ln q of the hidden chains of `next` (β, and α of the status HMM) drawn by
+    /// [`TrackerDynamics::sample_hidden`] with [`DynamicsSettings::hidden_exploration`]: the
+    /// importance ratio every proposal adds to the weight; exactly 0 when ε = 0. A jump
+    /// ([`TrackerDynamics::sample_jump`]) draws α from a locked target, and so is weighted.
+    pub fn log_hidden_exploration_ratio(&self, previous: &Particle, next: &Particle) -> f64 {
+        let eps = self.settings.hidden_exploration;
+        if eps <= 0.0 {
+            return 0.0;
+        }
+        let clutter = match &self.clutter {
+            ClutterProcess::Fixed(_) => 0.0,
+            ClutterProcess::Switching(hmm) => {
+                hmm.chain()
+                    .log_exploration_ratio(previous.clutter.beta, next.clutter.beta, eps)
             }
         };
+        let status = match &self.occlusion {
+            OcclusionModel::Status(hmm) => {
+                let from = if Reacquisition::is_jump(&previous.now, &next.prev) {
+                    dbn_switch::Status::Locked
+                } else {
+                    previous.status.alpha
+                };
+                hmm.chain()
+                    .log_exploration_ratio(from.index(), next.status.alpha.index(), eps)
+            }
+            _ => 0.0,
+        };
+        clutter + status
     }
 
     /// Reshapes a γ drawn uniformly on the locked range into the truncated exponential of

@@ -226,11 +226,33 @@ impl smc_core::Proposal for MotionProposal<'_> {
     }
 
     /// The density of the particle's component: the jump (share η, identical to the prior's, see
-    /// [`crate::reacquire`]) or the continuation below, times 1 − η.
+    /// [`crate::reacquire`]) or the continuation below, times 1 − η; less the hidden chains'
+    /// exploration ratio ([`TrackerDynamics::log_hidden_exploration_ratio`], 0 by default).
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
         self.dynamics.log_with_jump(previous, next, || {
             self.log_continuation_density(previous, next)
-        })
+        }) - self.dynamics.log_hidden_exploration_ratio(previous, next)
+    }
+}
+
+/// The prior as the proposal when its hidden chains explore
+/// ([`crate::DynamicsSettings::hidden_exploration`] > 0): draws as the prior does, and its density
+/// is the prior's kinematic density less the exploration ratio, so that Eq. 3's weight is the
+/// likelihood times `T / q` of the hidden chains. With ε = 0 the trackers use
+/// [`smc_core::Bootstrap`] instead, whose densities cancel unevaluated.
+#[derive(Debug, Clone, Copy)]
+pub struct ExploringPrior<'a>(pub &'a TrackerDynamics);
+
+impl smc_core::Proposal for ExploringPrior<'_> {
+    type State = Particle;
+
+    fn sample<R: Rng + ?Sized>(&self, _index: usize, previous: &Particle, rng: &mut R) -> Particle {
+        smc_core::Dynamics::sample(self.0, previous, rng)
+    }
+
+    fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
+        smc_core::Dynamics::log_density(self.0, previous, next)
+            - self.0.log_hidden_exploration_ratio(previous, next)
     }
 }
 
@@ -360,6 +382,61 @@ mod tests {
         );
         p.cluster = 0;
         (dynamics, vec![motion], p)
+    }
+
+    #[test]
+    fn explored_hidden_chains_are_weighted_by_t_over_q() {
+        use crate::dynamics::ClutterProcess;
+        use smc_core::{Dynamics, Proposal};
+        let (mut dynamics, clusters, mut previous) = setup();
+        dynamics.clutter = ClutterProcess::Switching(
+            dbn_switch::ClutterHmm::new(&dbn_switch::ClutterConfig::default()).unwrap(),
+        );
+        previous.clutter.lambda = 0.01;
+        fn motion<'a>(d: &'a TrackerDynamics, clusters: &'a [ClusterMotion]) -> MotionProposal<'a> {
+            MotionProposal {
+                dynamics: d,
+                clusters,
+                occlusion_aware: false,
+            }
+        }
+        // ε = 0: no ratio, and the motion proposal's density is the plain one.
+        let mut rng = <rand_pcg::Pcg64Mcg as rand::SeedableRng>::seed_from_u64(3);
+        let next = motion(&dynamics, &clusters).sample(0, &previous, &mut rng);
+        assert_eq!(dynamics.log_hidden_exploration_ratio(&previous, &next), 0.0);
+        let plain = motion(&dynamics, &clusters).log_density(0, &previous, &next);
+        dynamics.settings.hidden_exploration = 0.25;
+        let chain = match &dynamics.clutter {
+            ClutterProcess::Switching(hmm) => hmm.chain().clone(),
+            ClutterProcess::Fixed(_) => unreachable!(),
+        };
+        let mut switched = 0;
+        for _ in 0..400 {
+            for next in [
+                ExploringPrior(&dynamics).sample(0, &previous, &mut rng),
+                motion(&dynamics, &clusters).sample(0, &previous, &mut rng),
+            ] {
+                let (i, j) = (previous.clutter.beta, next.clutter.beta);
+                switched += usize::from(i != j);
+                let t = chain.prob(i, j);
+                let q = 0.75 * t + 0.25 / chain.n_states() as f64;
+                let ratio = (t / q).ln();
+                assert!(
+                    (dynamics.log_hidden_exploration_ratio(&previous, &next) - ratio).abs() < 1e-12
+                );
+                // Eq. 3's p / q is the hidden chains' T / q.
+                let weight = Dynamics::log_density(&dynamics, &previous, &next)
+                    - ExploringPrior(&dynamics).log_density(0, &previous, &next);
+                assert!((weight - ratio).abs() < 1e-9, "{weight} vs {ratio}");
+            }
+        }
+        assert!(switched > 0);
+        // The same particle's motion density moves by the ratio only.
+        dynamics.settings.hidden_exploration = 0.0;
+        assert_eq!(
+            motion(&dynamics, &clusters).log_density(0, &previous, &next),
+            plain
+        );
     }
 
     #[test]

@@ -19,7 +19,7 @@ use crate::dynamics::{ClutterProcess, OcclusionModel, TrackerDynamics};
 use crate::frame::Frame;
 use crate::observation::{FrameObservation, LikelihoodModel, ReferenceLines};
 use crate::particle::{Particle, default_status};
-use crate::proposal::{ClusterMotion, MotionProposal, state_increment};
+use crate::proposal::{ClusterMotion, ExploringPrior, MotionProposal, state_increment};
 use crate::reacquire::{Reacquisition, TrackMemory};
 use crate::smoothing::SmoothedRun;
 use crate::space::{STATE_SLOTS, ShapeBounds, StateVector, UNBOUNDED_CENTRE, axpy, pose_box};
@@ -595,6 +595,17 @@ impl Tracker for ParticleTracker {
             reference: &self.reference,
         };
         let weighted = match self.config.proposal {
+            ProposalKind::Prior if self.config.dynamics.hidden_exploration > 0.0 => {
+                let proposal = ExploringPrior(&self.dynamics);
+                self.filter.propagate(&mut set, &proposal, seed, step);
+                self.filter.weight(
+                    &mut set,
+                    &proposal,
+                    Some(&self.dynamics),
+                    &observation,
+                    step,
+                )
+            }
             ProposalKind::Prior => {
                 let proposal = Bootstrap(&self.dynamics);
                 self.filter.propagate(&mut set, &proposal, seed, step);

@@ -3,8 +3,6 @@
 
 use std::f64::consts::PI;
 
-use rand::Rng;
-use rand_distr::{Distribution, StandardNormal};
 use smc_core::estimate::weighted_mean_covariance;
 use smc_core::model::{Dynamics, FnObservation, TransitionDensity};
 use smc_core::rng::stream_rng;
@@ -14,13 +12,10 @@ use smc_core::{
     sample_trajectories, smooth_marginals,
 };
 
-pub(crate) fn gauss<R: Rng + ?Sized>(rng: &mut R) -> f64 {
-    StandardNormal.sample(rng)
-}
-
-pub(crate) fn normal_log_pdf(x: f64, mean: f64, var: f64) -> f64 {
-    -0.5 * ((x - mean).powi(2) / var + (2.0 * PI * var).ln())
-}
+pub(crate) use crate::common::{
+    AR1, Ar1, ConstantVelocity, F, M2, add, gauss, inverse, kalman_1d, kalman_2d, mul,
+    normal_log_pdf, transpose,
+};
 
 /// Which smoother a run uses.
 #[derive(Clone, Copy, Debug)]
@@ -117,22 +112,6 @@ pub(crate) fn filter_settings(threshold: f64, parallel: bool) -> FilterSettings 
 // 1-D: x_k = a x_{k−1} + N(0, q), z_k = x_k + N(0, r), x_0 ~ N(m0, p0); the filter observes
 // z_1..z_T, so history frame t holds x_{t+1}.
 
-#[derive(Clone, Copy)]
-pub(crate) struct Ar1 {
-    pub(crate) a: f64,
-    pub(crate) q: f64,
-}
-
-impl Dynamics for Ar1 {
-    type State = f64;
-    fn sample<R: Rng + ?Sized>(&self, x: &f64, rng: &mut R) -> f64 {
-        self.a * x + self.q.sqrt() * gauss(rng)
-    }
-    fn log_density(&self, x: &f64, y: &f64) -> f64 {
-        normal_log_pdf(*y, self.a * x, self.q)
-    }
-}
-
 impl TransitionDensity for Ar1 {
     type State = f64;
     fn log_density(&self, _frame: usize, x: &f64, y: &f64) -> f64 {
@@ -144,8 +123,6 @@ impl TransitionDensity for Ar1 {
         Some(-0.5 * (2.0 * PI * self.q).ln())
     }
 }
-
-pub(crate) const AR1: Ar1 = Ar1 { a: 0.9, q: 0.5 };
 
 impl Ar1 {
     /// −½ log(2π q) for q = 0.5, i.e. −½ log π.
@@ -172,29 +149,17 @@ pub(crate) fn simulate_1d() -> Vec<f64> {
 /// The Kalman filter followed by the RTS smoother (Särkkä 2013, Theorem 8.2): smoothed means
 /// and variances, and the filtered variances.
 pub(crate) fn rts_1d(zs: &[f64]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<f64>) {
-    let (mut m, mut p) = (M0, P0);
-    let (mut ms, mut ps, mut pred_m, mut pred_p) = (vec![], vec![], vec![], vec![]);
-    for &z in zs {
-        m *= AR1.a;
-        p = AR1.a * AR1.a * p + AR1.q;
-        pred_m.push(m);
-        pred_p.push(p);
-        let k = p / (p + R_1D);
-        m += k * (z - m);
-        p *= 1.0 - k;
-        ms.push(m);
-        ps.push(p);
-    }
-    let filtered = ps.clone();
+    let k = kalman_1d(AR1, R_1D, M0, P0, zs);
+    let (mut ms, mut ps) = (k.means, k.covs.clone());
     for t in (0..zs.len() - 1).rev() {
-        let g = ps[t] * AR1.a / pred_p[t + 1];
-        ms[t] += g * (ms[t + 1] - pred_m[t + 1]);
-        ps[t] += g * g * (ps[t + 1] - pred_p[t + 1]);
+        let g = ps[t] * AR1.a / k.predicted_covs[t + 1];
+        ms[t] += g * (ms[t + 1] - k.predicted_means[t + 1]);
+        ps[t] += g * g * (ps[t + 1] - k.predicted_covs[t + 1]);
     }
     (
         ms.into_iter().map(|v| vec![v]).collect(),
         ps.into_iter().map(|v| vec![v]).collect(),
-        filtered,
+        k.covs,
     )
 }
 
@@ -253,92 +218,9 @@ pub(crate) fn check(
 // 2-D constant velocity: x = (position, velocity), x_k = F x_{k−1} + w, w ~ N(0, Q),
 // Q = σ² [[dt³/3, dt²/2], [dt²/2, dt]], z_k = position + N(0, r).
 
-pub(crate) const SIGMA2: f64 = 0.2;
 pub(crate) const R_2D: f64 = 1.0;
 pub(crate) const CV_M0: [f64; 2] = [0.0, 1.0];
-pub(crate) const CV_P0: [[f64; 2]; 2] = [[1.0, 0.0], [0.0, 0.5]];
-
-pub(crate) type M2 = [[f64; 2]; 2];
-
-pub(crate) fn q_matrix() -> M2 {
-    [[SIGMA2 / 3.0, SIGMA2 / 2.0], [SIGMA2 / 2.0, SIGMA2]]
-}
-
-pub(crate) fn mul(a: &M2, b: &M2) -> M2 {
-    let mut c = [[0.0; 2]; 2];
-    for (i, row) in c.iter_mut().enumerate() {
-        for (j, v) in row.iter_mut().enumerate() {
-            *v = a[i][0] * b[0][j] + a[i][1] * b[1][j];
-        }
-    }
-    c
-}
-
-pub(crate) fn transpose(a: &M2) -> M2 {
-    [[a[0][0], a[1][0]], [a[0][1], a[1][1]]]
-}
-
-pub(crate) fn add(a: &M2, b: &M2, s: f64) -> M2 {
-    [
-        [a[0][0] + s * b[0][0], a[0][1] + s * b[0][1]],
-        [a[1][0] + s * b[1][0], a[1][1] + s * b[1][1]],
-    ]
-}
-
-pub(crate) fn inverse(a: &M2) -> M2 {
-    let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-    [
-        [a[1][1] / det, -a[0][1] / det],
-        [-a[1][0] / det, a[0][0] / det],
-    ]
-}
-
-pub(crate) const F: M2 = [[1.0, 1.0], [0.0, 1.0]];
-
-pub(crate) struct ConstantVelocity {
-    /// Lower Cholesky factor of Q.
-    pub(crate) l: M2,
-    pub(crate) q_inv: M2,
-    pub(crate) log_norm: f64,
-}
-
-impl ConstantVelocity {
-    pub(crate) fn new() -> Self {
-        let q = q_matrix();
-        let l00 = q[0][0].sqrt();
-        let l10 = q[1][0] / l00;
-        let l11 = (q[1][1] - l10 * l10).sqrt();
-        let det = q[0][0] * q[1][1] - q[0][1] * q[1][0];
-        Self {
-            l: [[l00, 0.0], [l10, l11]],
-            q_inv: inverse(&q),
-            log_norm: -(2.0 * PI).ln() - 0.5 * det.ln(),
-        }
-    }
-    pub(crate) fn predict(x: &[f64; 2]) -> [f64; 2] {
-        [x[0] + x[1], x[1]]
-    }
-}
-
-impl Dynamics for ConstantVelocity {
-    type State = [f64; 2];
-    fn sample<R: Rng + ?Sized>(&self, x: &[f64; 2], rng: &mut R) -> [f64; 2] {
-        let (e0, e1) = (gauss(rng), gauss(rng));
-        let p = Self::predict(x);
-        [
-            p[0] + self.l[0][0] * e0,
-            p[1] + self.l[1][0] * e0 + self.l[1][1] * e1,
-        ]
-    }
-    fn log_density(&self, x: &[f64; 2], y: &[f64; 2]) -> f64 {
-        let p = Self::predict(x);
-        let d = [y[0] - p[0], y[1] - p[1]];
-        let qi = self.q_inv;
-        let quad =
-            d[0] * (qi[0][0] * d[0] + qi[0][1] * d[1]) + d[1] * (qi[1][0] * d[0] + qi[1][1] * d[1]);
-        self.log_norm - 0.5 * quad
-    }
-}
+pub(crate) const CV_P0: M2 = [[1.0, 0.0], [0.0, 0.5]];
 
 impl TransitionDensity for ConstantVelocity {
     type State = [f64; 2];
@@ -367,37 +249,23 @@ pub(crate) fn simulate_2d(model: &ConstantVelocity) -> Vec<f64> {
 /// Kalman filter and RTS smoother (Särkkä 2013, Theorem 8.2) for the constant-velocity model:
 /// smoothed means and variances per coordinate.
 pub(crate) fn rts_2d(zs: &[f64]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
-    let q = q_matrix();
-    let (mut m, mut p) = (CV_M0, CV_P0);
-    let (mut ms, mut ps, mut pred_m, mut pred_p) = (vec![], vec![], vec![], vec![]);
-    for &z in zs {
-        m = ConstantVelocity::predict(&m);
-        p = add(&mul(&mul(&F, &p), &transpose(&F)), &q, 1.0);
-        pred_m.push(m);
-        pred_p.push(p);
-        let s = p[0][0] + R_2D;
-        let k = [p[0][0] / s, p[1][0] / s];
-        let innovation = z - m[0];
-        m = [m[0] + k[0] * innovation, m[1] + k[1] * innovation];
-        p = [
-            [p[0][0] - k[0] * p[0][0], p[0][1] - k[0] * p[0][1]],
-            [p[1][0] - k[1] * p[0][0], p[1][1] - k[1] * p[0][1]],
-        ];
-        ms.push(m);
-        ps.push(p);
-    }
+    let k = kalman_2d(CV_M0, CV_P0, R_2D, zs);
+    let (mut ms, mut ps) = (k.means, k.covs);
     for t in (0..zs.len() - 1).rev() {
         // G = P_t Fᵀ (P⁻_{t+1})⁻¹; m_t += G (m_{t+1}^s − m⁻_{t+1}); P_t += G (P_{t+1}^s − P⁻_{t+1}) Gᵀ.
-        let g = mul(&mul(&ps[t], &transpose(&F)), &inverse(&pred_p[t + 1]));
+        let g = mul(
+            &mul(&ps[t], &transpose(&F)),
+            &inverse(&k.predicted_covs[t + 1]),
+        );
         let dm = [
-            ms[t + 1][0] - pred_m[t + 1][0],
-            ms[t + 1][1] - pred_m[t + 1][1],
+            ms[t + 1][0] - k.predicted_means[t + 1][0],
+            ms[t + 1][1] - k.predicted_means[t + 1][1],
         ];
         ms[t] = [
             ms[t][0] + g[0][0] * dm[0] + g[0][1] * dm[1],
             ms[t][1] + g[1][0] * dm[0] + g[1][1] * dm[1],
         ];
-        let dp = add(&ps[t + 1], &pred_p[t + 1], -1.0);
+        let dp = add(&ps[t + 1], &k.predicted_covs[t + 1], -1.0);
         ps[t] = add(&ps[t], &mul(&mul(&g, &dp), &transpose(&g)), 1.0);
     }
     (
