@@ -118,7 +118,10 @@ fn presets_reproduce_their_golden_tracks_on_a_short_clutter_scene() {
                     .lines()
                     .zip(text.lines())
                     .position(|(a, b)| a != b)
-                    .map_or_else(|| "the line count".to_owned(), |i| format!("line {}", i + 1));
+                    .map_or_else(
+                        || "the line count".to_owned(),
+                        |i| format!("line {}", i + 1),
+                    );
                 mismatches.push(format!("{preset}/{name} differs at {line}"));
             }
         }
