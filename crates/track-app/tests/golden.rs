@@ -1,8 +1,9 @@
 //! Golden outputs: `track run` with a few presets on a short synthetic scene, compared byte for
 //! byte with the files under `assets/golden/` at the top of the workspace.
 //!
-//! The scene is the `mclutter` preset of `scene-synth` (three clutter bands), 10 frames rendered
-//! with seed 1 and written in the OTB layout in a temporary folder; each preset then tracks it
+//! The scene is the `mclutter` preset of `scene-synth` (three clutter bands) rendered with seed 1;
+//! its first 15 frames (at the preset's speed) are written in the OTB layout in a temporary
+//! folder (`img/0001.png`…, `groundtruth_rect.txt`); each preset then tracks it
 //! with 100 particles, seed 7 and `--parallel`. The tracker's numerics do not depend on the
 //! number of threads, so the files are the same under `RAYON_NUM_THREADS=1` and `=2`.
 //!
@@ -25,14 +26,14 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::{s, track};
-use scene_synth::{Scenario, ScenarioParams, Scene, write_sequence};
+use scene_synth::{Scenario, Scene};
 
 /// The presets whose outputs are kept: the region tracker, CONDENSATION, Odobez's motion
 /// proposal, Wu's switching model with the occlusion arc, and the combined tracker.
 const PRESETS: [&str; 5] = ["head", "m1", "m3", "w-eval", "full"];
 
-/// Frames of the scene; short so the whole test stays within a few seconds.
-const FRAMES: usize = 10;
+/// Frames tracked: the first of the 120-frame scene, so the whole test stays within a few seconds.
+const FRAMES: usize = 15;
 
 /// `assets/golden/` at the top of the workspace.
 fn golden_dir() -> PathBuf {
@@ -67,10 +68,18 @@ fn presets_reproduce_their_golden_tracks_on_a_short_clutter_scene() {
     let update = std::env::var("UPDATE_GOLDEN").is_ok_and(|v| v == "1");
     let dir = tempfile::tempdir().unwrap();
     let seq = dir.path().join("mclutter");
-    let mut params = ScenarioParams::preset(Scenario::Mclutter);
-    params.frames = FRAMES;
-    let scene = Scene::new(&params, 1).unwrap();
-    assert_eq!(write_sequence(&seq, &scene).unwrap(), FRAMES);
+    let scene = Scene::preset(Scenario::Mclutter, 1).unwrap();
+    std::fs::create_dir_all(seq.join("img")).unwrap();
+    let mut rects = String::new();
+    for k in 0..FRAMES {
+        let (frame, truth) = scene.render_frame(k).unwrap();
+        frame
+            .save(seq.join("img").join(format!("{:04}.png", k + 1)))
+            .unwrap();
+        rects.push_str(&truth.rect_line());
+        rects.push('\n');
+    }
+    std::fs::write(seq.join("groundtruth_rect.txt"), rects).unwrap();
 
     let mut mismatches = Vec::new();
     for preset in PRESETS {
