@@ -239,7 +239,7 @@ fn occlusion_estimate_rises_while_hidden_and_falls_after() {
     // 0.083 / 0.929 / 0.093, 0.065 / 0.886 / 0.091, 0.138 / 0.621 / 0.088, 0.097 / 0.800 / 0.076,
     // 0.075 / 0.720 / 0.083, 0.126 / 0.930 / 0.112, 0.073 / 0.909 / 0.073; w-eval, seeds 1–4:
     // 0.113 / 0.772 / 0.112, 0.116 / 0.617 / 0.111, 0.129 / 0.793 / 0.105, 0.106 / 0.865 / 0.105.
-    // Wu's Eq. 11–12 as printed (w-occ before the seventh pass) rose to 0.93 and stayed there to
+    // Wu's Eq. 11–12 as printed (w-occ without the occlusion arc) rose to 0.93 and stayed there to
     // the end, lost; with the arc but σ_γ = 0.1, γ̂ did not rise on seeds 1, 3 and 6.
     assert_rise_and_fall(Preset::WOcc, 1..=8);
     assert_rise_and_fall(Preset::WEval, 1..=4);

@@ -1,6 +1,6 @@
 //! Robust multiresolution parametric motion estimation with an honest covariance, and the patch
 //! sampler and NCC distance of the implicit motion likelihood — Odobez, Gatica-Perez & Ba 2003,
-//! §4.2 (Eq. 13–15) and Eq. 22–23, after their reference [10] (Odobez & Bouthemy 1995).
+//! §4.2 (Eq. 13–15) and Eq. 22–23, after their ref. 10 (Odobez & Bouthemy 1995).
 //!
 //! * [`Pyramid`]: Gaussian pyramids in f32, over a window of the image, in reusable buffers.
 //! * [`MotionEstimator`]: coarse-to-fine incremental Gauss–Newton with IRLS (Tukey biweight by

@@ -1,5 +1,5 @@
 //! The "meat" of the sandwich covariance (see [`crate::estimator`]): Σ_s v(s) v(s)ᵀ with
-//! v = K ∗ U, where U holds the per-pixel vectors u = m E[ψ'] J scattered onto the noise samples
+//! v = K ∗ U, where U holds the per-pixel vectors u = m E\[ψ'\] J scattered onto the noise samples
 //! their residuals read — the pixel itself in the first frame, the 4×4 interpolation taps around
 //! r + d(r) in the second — and K is the pre-smoothing kernel.
 //!

@@ -96,10 +96,8 @@ pub struct DynamicsSettings {
     /// range instead of Wu's uniform (0, the default: uniform). Drawn by mapping the uniform draw
     /// through the exponential's inverse distribution function, so the random streams do not
     /// change; the hidden variables are drawn from their prior, so no weight term is needed.
-    /// Measured for w-eval (docs/RESULTS.md, fifth pass): κ = 10 lowers the free-target γ̂ (γ̂
-    /// MAE on `mclutter`, seeds 1–12, 0.104 → 0.077; `occlusion` 0.175 → 0.152) without a loss
-    /// over 12 seeds, but at seed 1 its `occlusion` β̂ and α̂ fall below the targets (84.9 % and
-    /// 83.2 %), so every preset keeps 0.
+    /// κ > 0 pulls the free-target γ̂ below the locked range's mean; no preset uses it (why:
+    /// docs/RESULTS.md, decision log).
     #[serde(default)]
     pub locked_gamma_rate: f64,
     /// r, the pull of the size and shape components towards the target's remembered shape per
@@ -108,12 +106,10 @@ pub struct DynamicsSettings {
     /// x̄ the shape anchor of `TrackerDynamics::shape_anchor` — Blake & Isard's second-order
     /// shape-space model with a mean shape, the mean being the shape the tracker remembers over
     /// its locked estimates (`reacquire::TrackMemory`, gain 0.05; the initial shape when
-    /// reacquisition is off). Without an anchor the prediction is unchanged. Measured for w-eval
-    /// (docs/RESULTS.md, sixth pass; r = 0.1, seeds 1–32): on `occlusion` it stops the contour
-    /// from shrinking onto the visible sliver of the target (β̂ 92.9 → 96.2 %, γ̂ MAE 0.171 →
-    /// 0.134, α̂ 80.3 → 84.9 %), but on `distractor`, whose camera zooms, the slowly remembered
-    /// size is the wrong mean (mean IoU 0.711 → 0.640, β̂ 87.6 → 77.4 %, γ̂ MAE 0.340 → 0.476),
-    /// so it stays off.
+    /// reacquisition is off). Without an anchor the prediction is unchanged. It keeps a contour
+    /// from shrinking onto the visible sliver of a target sliding behind an occluder, but under a
+    /// zooming camera the slowly remembered size is the wrong mean, so it stays off
+    /// (docs/RESULTS.md, decision log).
     #[serde(default)]
     pub shape_reversion: f64,
     /// ε, the share of each particle's hidden-chain transitions (β, and α of the status HMM)

@@ -4,7 +4,7 @@
 //!
 //! Sample positions c + k·n are stepped in fixed point (`GreyView::sample_line`): within
 //! ~1e−6 px of the exact positions, so edge offsets agree with per-sample f32 interpolation to
-//! well under 1e−4 px (measured worst 5.5e−5 px, `tests/fast_paths.rs`).
+//! within 1e−4 px (asserted by `tests/fast_paths.rs`).
 //!
 //! Lines wholly inside the image go through the batched fast scan ([`crate::scan`]); the
 //! others through the general path (the in-image interval, clamped sampling, the detector).

@@ -1,5 +1,5 @@
 //! Coarse-to-fine robust Gauss–Newton estimation of a parametric motion model (Odobez et al. 2003
-//! §4.2, Eq. 13–14; their reference [10], Odobez & Bouthemy 1995), with an honest covariance.
+//! §4.2, Eq. 13–14; their ref. 10, Odobez & Bouthemy 1995), with an honest covariance.
 //!
 //! At each pyramid level the displaced frame difference DFD(r) = z₁(r + d_Θ(r)) − z₀(r) − c is
 //! linearised around the current Θ and Σ w_r (DFD + J_r δ)² is minimised, with IRLS weights
@@ -10,10 +10,10 @@
 //! # Covariance
 //! At convergence Θ̂ solves F(Θ) = Σ_r m_r σ̂ ψ(DFD_r/σ̂) J_r = 0, so Cov(Θ̂) = H⁻¹ Var(F) H⁻ᵀ with
 //! H = Σ_r m_r ψ'(DFD_r/σ̂) J_r J_rᵀ (the sandwich estimator of M-estimation). For jointly Gaussian
-//! residuals with correlation ρ between two pixels, Cov(ψ, ψ) ≈ E[ψ']²·ρ (first Hermite term), and
-//! Var(ψ) = E[ψ²] at the same pixel; so Var(F) = E[ψ']² Var(Σ_r u_r δDFD_r) with u_r = m_r J_r over
-//! the pixels ρ does not reject, plus the same-pixel correction (E[ψ²] − E[ψ']²) σ̂² Σ_r m_r² J_r J_rᵀ.
-//! (Using the realised ψ'(DFD_r/σ̂)² instead would over-state the variance by E[ψ'²]/E[ψ²] ≈ 1.10
+//! residuals with correlation ρ between two pixels, Cov(ψ, ψ) ≈ E\[ψ'\]²·ρ (first Hermite term), and
+//! Var(ψ) = E\[ψ²\] at the same pixel; so Var(F) = E\[ψ'\]² Var(Σ_r u_r δDFD_r) with u_r = m_r J_r over
+//! the pixels ρ does not reject, plus the same-pixel correction (E\[ψ²\] − E\[ψ'\]²) σ̂² Σ_r m_r² J_r J_rᵀ.
+//! (Using the realised ψ'(DFD_r/σ̂)² instead would over-state the variance by E\[ψ'²\]/E\[ψ²\] ≈ 1.10
 //! for Tukey.) The DFD is computed on pre-smoothed images, so δDFD_r = (K∗n₁)(r+d) −
 //! (K∗n₀)(r) is correlated across pixels; with n₀, n₁ white of variance σₙ², Var(Σ u_r (K∗n)(r)) =
 //! σₙ² Σ_s (K∗u)(s)(K∗u)(s)ᵀ for the first frame; for the second, u is first spread onto the
@@ -69,7 +69,7 @@ type Vec7 = SVector<f64, 7>;
 #[derive(Debug, Clone, Copy)]
 pub struct MotionEstimator {
     settings: Settings,
-    /// (E[ψ'], E[ψ²]) under Gaussian noise, for the covariance.
+    /// (E\[ψ'\], E\[ψ²\]) under Gaussian noise, for the covariance.
     moments: (f64, f64),
 }
 

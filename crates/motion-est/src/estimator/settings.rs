@@ -102,13 +102,13 @@ impl Settings {
     /// A preset for tracking, where an estimate feeds a particle filter's proposal whose noise is
     /// of the order of a pixel: the default settings with both tolerances loosened to 0.1 px (full
     /// resolution: from 5e-4; coarse levels: from 0.01 level pixels) and at most 8 iterations per
-    /// level (instead of 20; 4 was too few for a cold start on a fast target, see
-    /// `docs/results/motion-est.md`). Gauss–Newton's last step is then ≤ 0.1 px, but the estimate
-    /// is much closer: on the synthetic pairs the corner error is 0.0034 px (full frame)
-    /// and 0.0102 px (64×64), within the default settings' bounds, and the covariance stays
-    /// calibrated (ratio 0.91 on 64×64), because the final scale and covariance are always taken
-    /// at Θ̂ (see `REUSE_STEP`; after a last step of at most `LINEAR_STEP` the residuals at Θ̂
-    /// are the last evaluation's moved to first order, otherwise they are evaluated again). Non-convergence is still reported.
+    /// level (instead of 20; fewer are too few for a cold start on a fast target). Gauss–Newton's
+    /// last step is then ≤ 0.1 px, but the estimate is much closer, and the covariance stays
+    /// calibrated, because the final scale and covariance are always taken at Θ̂ (see
+    /// `REUSE_STEP`; after a last step of at most `LINEAR_STEP` the residuals at Θ̂ are the last
+    /// evaluation's moved to first order, otherwise they are evaluated again). The accuracy and
+    /// calibration tests check this preset against the same bounds as the defaults; measured
+    /// figures: docs/RESULTS.md, "Motion estimation". Non-convergence is still reported.
     pub fn tracking() -> Self {
         Self {
             tolerance: 0.1,

@@ -114,8 +114,8 @@ pub(super) struct Band {
 /// Runs `f` on a thread of rayon's pool when the work is `large` (and the `parallel` feature is
 /// on) and the caller is not already one: the bands of a large region are then forked from a
 /// pool thread, which the other threads steal from while still spinning, instead of each fork
-/// being injected from outside and the caller sleeping until it is done (measured: that handoff
-/// cost ~2 ms per full-frame estimate). The result does not depend on where `f` runs.
+/// being injected from outside and the caller sleeping until it is done (one cross-thread handoff
+/// per fork). The result does not depend on where `f` runs.
 pub(super) fn on_pool<R: Send>(large: bool, f: impl FnOnce() -> R + Send) -> R {
     #[cfg(feature = "parallel")]
     if large && rayon::current_thread_index().is_none() {
