@@ -258,9 +258,9 @@ impl MotionEstimator {
     /// # Examples
     /// ```
     /// use motion_est::{
-    ///     GreyImage, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Request, Settings,
-    ///     Workspace,
+    ///     ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Request, Settings, Workspace,
     /// };
+    /// use vision_core::GreyImage;
     /// let (w, h) = (96, 80);
     /// let tex = |x: f64, y: f64| 128.0 + 40.0 * (0.31 * x + 0.1 * y).sin() + 30.0 * (0.23 * y - 0.05 * x).cos();
     /// let f0: Vec<f32> = (0..w * h).map(|k| tex((k % w) as f64, (k / w) as f64) as f32).collect();
