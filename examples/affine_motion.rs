@@ -16,7 +16,8 @@
 //! which is not a dependency of motion-est.
 #![allow(clippy::print_stdout)]
 
-use motion_est::{ImageView, ModelSpec, MotionEstimator, MotionModel, Region, Settings};
+use motion_est::{ModelSpec, MotionEstimator, MotionModel, Region, Settings};
+use vision_core::GreyImage;
 
 /// The motion of the synthetic pair, about a 2° rotation, a 3 % zoom and a shift of
 /// (1.5, −0.7) px, as [a1 … a6] about the image centre.
@@ -43,8 +44,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let estimator = MotionEstimator::new(Settings::default())?;
     let estimate = estimator.estimate_images(
-        ImageView::new(width, height, &first)?,
-        ImageView::new(width, height, &second)?,
+        GreyImage::new(width, height, &first)?,
+        GreyImage::new(width, height, &second)?,
         &Region::Full,
         ModelSpec::new(MotionModel::Affine, false),
         None,

@@ -17,6 +17,8 @@ pub use smc_core;
 pub use track_app;
 #[doc(inline)]
 pub use trackers;
+#[doc(inline)]
+pub use vision_core;
 
 // The Rust code in the top-level README and in the README of motion-est (whose sources this
 // crate does not own) is compiled and run as doctests of this crate.

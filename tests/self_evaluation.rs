@@ -2,10 +2,10 @@
 //! noise and on a static checkerboard, `full` must not claim the track is locked, while on a
 //! scene with a target it still says locked. Several noise draws and tracker seeds each.
 
-use contour_obs::Ellipse;
-use dbn_switch::Status;
+use dbn_switch::TrackStatus;
 use rand::{Rng, SeedableRng};
 use trackers::{Frame, Preset, build};
+use vision_core::Ellipse;
 
 const W: usize = 320;
 const H: usize = 240;
@@ -24,7 +24,8 @@ fn locked_share(frames: &[Vec<f32>], size: (usize, usize), start: Ellipse, seed:
         } else {
             tracker.update(frame).unwrap()
         };
-        if k >= SETTLE && e.status.expect("full reports a status").alpha_hat == Status::Locked {
+        if k >= SETTLE && e.status.expect("full reports a status").alpha_hat == TrackStatus::Locked
+        {
             locked += 1;
         }
     }
@@ -37,7 +38,7 @@ fn start() -> Ellipse {
         cy: 125.0,
         a: 30.0,
         b: 35.0,
-        theta: 0.0,
+        angle: 0.0,
     }
 }
 

@@ -3,9 +3,9 @@
 //! tight dynamics, the occlusion process rises with a real occlusion, and the reacquisition jump
 //! finds the target again after it.
 
-use contour_obs::Ellipse;
 use scene_synth::{FrameTruth, Scenario, ScenarioParams, Scene};
 use trackers::{Estimate, Preset, TrackerConfig, build};
+use vision_core::{Ellipse, first_failure};
 
 /// A rendered scene: frames (grey f32) and truth.
 struct Clip {
@@ -42,7 +42,7 @@ fn track(clip: &Clip, config: TrackerConfig) -> Vec<Estimate> {
         cy: e.cy,
         a: e.a,
         b: e.b,
-        theta: e.angle,
+        angle: e.angle,
     };
     clip.frames
         .iter()
@@ -58,20 +58,11 @@ fn track(clip: &Clip, config: TrackerConfig) -> Vec<Estimate> {
         .collect()
 }
 
-fn iou(e: &Estimate, t: &FrameTruth) -> f64 {
-    let [x, y, w, h] = e.bbox;
-    let g = t.bbox;
-    let ix = ((x + w).min(g.x + g.w) - x.max(g.x)).max(0.0);
-    let iy = ((y + h).min(g.y + g.h) - y.max(g.y)).max(0.0);
-    let inter = ix * iy;
-    inter / (w * h + g.w * g.h - inter)
-}
-
 fn ious(clip: &Clip, estimates: &[Estimate]) -> Vec<f64> {
     estimates
         .iter()
         .zip(&clip.truth)
-        .map(|(e, t)| iou(e, t))
+        .map(|(e, t)| e.bbox.iou(&t.bbox))
         .collect()
 }
 
@@ -81,7 +72,7 @@ fn mean(v: &[f64]) -> f64 {
 
 /// docs/MODELS.md's failure rule: IoU below 0.2 for 5 consecutive frames.
 fn failed(ious: &[f64]) -> bool {
-    ious.windows(5).any(|w| w.iter().all(|&v| v < 0.2))
+    first_failure(ious).is_some()
 }
 
 #[test]

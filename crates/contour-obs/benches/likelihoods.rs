@@ -8,10 +8,11 @@
 use std::hint::black_box;
 
 use contour_obs::{
-    GreyView, LineSettings, OcclusionLikelihood, OdobezLikelihood, OdobezSettings, Template,
-    WuLikelihood, WuSettings,
+    LineSettings, OcclusionLikelihood, OdobezLikelihood, OdobezSettings, Template, WuLikelihood,
+    WuSettings,
 };
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use vision_core::GreyImage;
 
 #[path = "../examples/common/frame.rs"]
 mod frame;
@@ -42,7 +43,7 @@ fn models(lines: LineSettings) -> (OdobezLikelihood, WuLikelihood, OcclusionLike
 
 fn bench(c: &mut Criterion) {
     let s = scene();
-    let image = match GreyView::new(W, H, &s.data) {
+    let image = match GreyImage::new(W, H, &s.data) {
         Ok(v) => v,
         Err(e) => panic!("bad frame: {e}"),
     };

@@ -14,9 +14,10 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use contour_obs::{
-    GreyView, LineSettings, OcclusionLikelihood, OdobezLikelihood, OdobezSettings, Template,
-    WuLikelihood, WuSettings,
+    LineSettings, OcclusionLikelihood, OdobezLikelihood, OdobezSettings, Template, WuLikelihood,
+    WuSettings,
 };
+use vision_core::GreyImage;
 
 #[path = "common/frame.rs"]
 mod frame;
@@ -55,7 +56,7 @@ fn fnv(values: &[f64], mut h: u64) -> u64 {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let s = scene();
-    let image = GreyView::new(W, H, &s.data).unwrap();
+    let image = GreyImage::new(W, H, &s.data).unwrap();
     let mut out = vec![0.0; N];
     if args.first().map(String::as_str) == Some("hash") {
         let mut total = 0xcbf2_9ce4_8422_2325u64;

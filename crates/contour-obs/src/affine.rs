@@ -3,46 +3,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
-
-/// An ellipse (cx, cy, a, b, θ): semi-axis `a` along (cos θ, sin θ), `b` along (−sin θ, cos θ).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Ellipse {
-    /// Centre x.
-    pub cx: f64,
-    /// Centre y.
-    pub cy: f64,
-    /// Semi-axis along (cos θ, sin θ).
-    pub a: f64,
-    /// Semi-axis along (−sin θ, cos θ).
-    pub b: f64,
-    /// Orientation of the `a` axis, radians.
-    pub theta: f64,
-}
-
-/// An axis-aligned box in image coordinates.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct BoundingBox {
-    /// Smallest x.
-    pub x_min: f64,
-    /// Smallest y.
-    pub y_min: f64,
-    /// Largest x.
-    pub x_max: f64,
-    /// Largest y.
-    pub y_max: f64,
-}
-
-impl BoundingBox {
-    /// Width `x_max − x_min`.
-    pub fn width(&self) -> f64 {
-        self.x_max - self.x_min
-    }
-
-    /// Height `y_max − y_min`.
-    pub fn height(&self) -> f64 {
-        self.y_max - self.y_min
-    }
-}
+use vision_core::{BoundingBox, Ellipse};
 
 /// A contour pose p = A·r + t mapping reference coordinates r (the unit circle or a B-spline
 /// template) to image coordinates p.
@@ -130,7 +91,7 @@ impl Affine2 {
             cy: self.t.y,
             a: l1.max(0.0).sqrt(),
             b: l2.max(0.0).sqrt(),
-            theta,
+            angle: theta,
         })
     }
 
@@ -154,18 +115,13 @@ impl Affine2 {
     pub fn bounding_box(&self) -> BoundingBox {
         let hw = self.a[(0, 0)].hypot(self.a[(0, 1)]);
         let hh = self.a[(1, 0)].hypot(self.a[(1, 1)]);
-        BoundingBox {
-            x_min: self.t.x - hw,
-            y_min: self.t.y - hh,
-            x_max: self.t.x + hw,
-            y_max: self.t.y + hh,
-        }
+        BoundingBox::from_corners(self.t.x - hw, self.t.y - hh, self.t.x + hw, self.t.y + hh)
     }
 }
 
 impl From<Ellipse> for Affine2 {
     fn from(e: Ellipse) -> Self {
-        Affine2::from_ellipse(e.cx, e.cy, e.a, e.b, e.theta)
+        Affine2::from_ellipse(e.cx, e.cy, e.a, e.b, e.angle)
     }
 }
 
@@ -192,12 +148,12 @@ mod tests {
         let e = p.to_ellipse().unwrap();
         assert_relative_eq!(e.a, 7.0, epsilon = 1e-12);
         assert_relative_eq!(e.b, 3.0, epsilon = 1e-12);
-        assert_relative_eq!(e.theta, 0.4, epsilon = 1e-12);
+        assert_relative_eq!(e.angle, 0.4, epsilon = 1e-12);
         assert_relative_eq!(e.cx, 10.0);
         // Bounding box of a rotated ellipse: half-width √(a²cos²θ + b²sin²θ).
         let bb = p.bounding_box();
         let hw = (49.0 * 0.4f64.cos().powi(2) + 9.0 * 0.4f64.sin().powi(2)).sqrt();
-        assert_relative_eq!(bb.width(), 2.0 * hw, epsilon = 1e-12);
+        assert_relative_eq!(bb.w, 2.0 * hw, epsilon = 1e-12);
         // And it touches the densest sampling of the posed circle.
         let max_x = (0..100_000)
             .map(|k| {
@@ -208,7 +164,7 @@ mod tests {
                 .x
             })
             .fold(f64::MIN, f64::max);
-        assert_relative_eq!(max_x, bb.x_max, epsilon = 1e-6);
+        assert_relative_eq!(max_x, bb.max_corner().0, epsilon = 1e-6);
     }
 
     #[test]

@@ -4,8 +4,9 @@
 use nalgebra::Vector2;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
+use vision_core::GreyImage;
 
-use crate::{EdgeSettings, Error, GreyView, LineSettings, MeasurementLines, Result};
+use crate::{EdgeSettings, Error, LineSettings, MeasurementLines, Result};
 
 /// Settings of clutter learning.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -120,7 +121,7 @@ impl ClutterModel {
 /// [`Error::NoImages`]; [`Error::ImageTooSmall`] when an image cannot hold a line; invalid
 /// settings.
 pub fn line_densities<R: Rng + ?Sized>(
-    images: &[GreyView<'_>],
+    images: &[GreyImage<'_>],
     settings: &ClutterSettings,
     rng: &mut R,
 ) -> Result<Vec<f64>> {
@@ -175,7 +176,7 @@ pub fn line_densities<R: Rng + ?Sized>(
 /// # Errors
 /// As [`line_densities`] and [`kmeans_1d`].
 pub fn learn_clutter<R: Rng + ?Sized>(
-    images: &[GreyView<'_>],
+    images: &[GreyImage<'_>],
     settings: &ClutterSettings,
     rng: &mut R,
 ) -> Result<ClutterModel> {
@@ -361,7 +362,7 @@ mod tests {
             Err(Error::NoImages)
         ));
         let d = vec![0.0f32; 400];
-        let im = GreyView::new(20, 20, &d).unwrap();
+        let im = GreyImage::new(20, 20, &d).unwrap();
         assert!(matches!(
             line_densities(&[im], &s, &mut rng),
             Err(Error::ImageTooSmall { .. })

@@ -2,9 +2,11 @@
 //! by conics fitting").
 
 use nalgebra::{Matrix6, Vector6};
+use vision_core::Ellipse;
 
 use crate::affine::sym2_eigen;
-use crate::{Ellipse, Error, Result};
+
+use crate::{Error, Result};
 
 /// Fits the conic A x² + B xy + C y² + D x + E y + F = 0 to `points` by algebraic least squares
 /// (the unit-norm coefficient vector minimising Σ residual², on centred and scaled coordinates for
@@ -87,7 +89,7 @@ pub fn fit_ellipse(points: &[[f64; 2]]) -> Result<Ellipse> {
         cy: cy * scale + my,
         a: major,
         b: minor,
-        theta,
+        angle: theta,
     })
 }
 
@@ -111,7 +113,7 @@ mod tests {
             })
             .collect();
         let e = fit_ellipse(&pts).unwrap();
-        for (got, want) in [(e.cx, cx), (e.cy, cy), (e.a, a), (e.b, b), (e.theta, th)] {
+        for (got, want) in [(e.cx, cx), (e.cy, cy), (e.a, a), (e.b, b), (e.angle, th)] {
             assert_relative_eq!(got, want, epsilon = 1e-7);
         }
     }

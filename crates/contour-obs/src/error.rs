@@ -15,18 +15,9 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
-    /// An image buffer does not match its stated size.
-    #[error("image of {width}x{height} needs {expected} pixels, got {got}")]
-    ImageSize {
-        /// Stated width.
-        width: usize,
-        /// Stated height.
-        height: usize,
-        /// `width * height`.
-        expected: usize,
-        /// Length of the buffer.
-        got: usize,
-    },
+    /// An invalid grey image (wrong size, empty, or a non-finite pixel).
+    #[error(transparent)]
+    Image(#[from] vision_core::Error),
     /// An image is too small for the requested operation.
     #[error("image of {width}x{height} is too small: at least {min}x{min} pixels are needed")]
     ImageTooSmall {

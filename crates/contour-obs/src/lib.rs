@@ -31,10 +31,11 @@
 //! signatures are kept.
 //!
 //! Conventions: x right, y down, pixel (i, j) centred at (i, j); grey images are row-major f32
-//! in 0–255 ([`GreyView`]); a pose maps reference r to image p = A·r + t.
+//! in 0–255 ([`vision_core::GreyImage`], sampled through [`Bilinear`]); a pose maps reference r to image p = A·r + t.
 //!
 //! ```
-//! use contour_obs::{Affine2, GreyView, Template, WuLikelihood, WuSettings};
+//! use contour_obs::{Affine2, Template, WuLikelihood, WuSettings};
+//! use vision_core::GreyImage;
 //!
 //! // A bright disc of radius 20 centred at (40, 30) on a dark 80×60 image.
 //! let (w, h) = (80, 60);
@@ -44,7 +45,7 @@
 //!         if x.hypot(y) < 20.0 { 200.0 } else { 20.0 }
 //!     })
 //!     .collect();
-//! let image = GreyView::new(w, h, &data)?;
+//! let image = GreyImage::new(w, h, &data)?;
 //! let model = WuLikelihood::new(WuSettings::default(), &Template::UnitCircle)?;
 //! let mut ws = model.workspace()?;
 //! let poses = [
@@ -79,7 +80,7 @@ mod wu;
 #[doc = include_str!("../README.md")]
 mod readme_doctest {}
 
-pub use affine::{Affine2, BoundingBox, Ellipse};
+pub use affine::Affine2;
 pub use clutter::{
     Cluster, ClutterModel, ClutterSettings, kmeans_1d, learn_clutter, line_densities,
 };
@@ -87,7 +88,7 @@ pub use conic::fit_ellipse;
 pub use contour::{Contour, Template};
 pub use edges::{EdgeDetector, EdgeSettings, Polarity, detect_edges};
 pub use error::{Error, Result};
-pub use image::GreyView;
+pub use image::Bilinear;
 pub use lines::{LineSettings, MeasurementLines};
 pub use odobez::{OdobezLikelihood, OdobezSettings, odobez_line_log_term};
 pub use wu::{

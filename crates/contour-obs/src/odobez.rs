@@ -3,8 +3,9 @@
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use vision_core::GreyImage;
 
-use crate::{Affine2, Contour, Error, GreyView, LineSettings, MeasurementLines, Result, Template};
+use crate::{Affine2, Contour, Error, LineSettings, MeasurementLines, Result, Template};
 
 /// Settings of Odobez's shape likelihood.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -122,14 +123,16 @@ impl OdobezLikelihood {
     /// cost. The workspace is left with no lines.
     ///
     /// # Errors
-    /// [`Error::NonFinite`] for a non-finite pose.
+    /// [`Error::NonFinite`] for a non-finite pose; [`Error::ImageTooSmall`] for an image below
+    /// 2×2 pixels.
     pub fn log_likelihood(
         &self,
         ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         pose: &Affine2,
     ) -> Result<f64> {
         ensure_workspace(ws, &self.settings.lines)?;
+        crate::image::check_samplable(image)?;
         if !pose.is_finite() {
             return Err(Error::NonFinite {
                 what: "pose",
@@ -162,7 +165,7 @@ impl OdobezLikelihood {
     pub fn log_likelihood_batch(
         &self,
         ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         poses: &[Affine2],
         out: &mut [f64],
     ) -> Result<()> {
@@ -181,7 +184,7 @@ impl OdobezLikelihood {
     /// As [`Self::log_likelihood_batch`].
     pub fn log_likelihood_batch_par(
         &self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         poses: &[Affine2],
         out: &mut [f64],
     ) -> Result<()> {

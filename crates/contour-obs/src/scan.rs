@@ -2,7 +2,7 @@
 //! derivative-of-Gaussian responses and the edge candidates of many lines at once, as one bit
 //! mask per line.
 //!
-//! It computes exactly what [`GreyView::sample_line`] and [`EdgeDetector`] compute on such a line
+//! It computes exactly what [`sample_line`](crate::image::sample_line) and [`EdgeDetector`] compute on such a line
 //! (the same fixed-point positions, interpolation, filter sums and suppression tests, in the same
 //! order), so every edge is the same to the bit; lines that touch the border take the general
 //! path.
@@ -17,10 +17,12 @@
 //! previous pass stored moments before in a different width (scalar stores read back as
 //! vectors), which would stall the processor's store forwarding.
 
+use vision_core::GreyImage;
+
 use crate::image::FIX_BITS;
 use nalgebra::Vector2;
 
-use crate::{EdgeDetector, GreyView, Polarity};
+use crate::{EdgeDetector, Polarity};
 
 /// The most samples per line a scan takes; longer lines take the general path. 64 covers the
 /// default lines (29 samples) and any line up to L = 56 px at σ = 1 px.
@@ -134,13 +136,13 @@ impl LineScan {
     /// and its samples
     /// all lie in [0, w − 1) × [0, h − 1), that is both end points do in fixed point, positions
     /// being linear in k; the other lanes read the first cell and nothing reads their masks.
-    /// Positions are stepped in fixed point exactly as [`GreyView::sample_line`]'s unclamped
+    /// Positions are stepped in fixed point exactly as [`sample_line`](crate::image::sample_line)'s unclamped
     /// loop; relative to the first sample's cell they fit an i32 (fewer than 64 samples,
     /// |n| ≤ 2). At most `max_lines` lines.
     #[inline(always)]
     pub(crate) fn place(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         lines: &[(Vector2<f64>, Vector2<f64>)],
         inside: impl Fn(Vector2<f64>, Vector2<f64>) -> bool,
     ) {
@@ -207,7 +209,7 @@ impl LineScan {
     /// Samples, interpolates, filters and suppresses all lines added, leaving one edge mask per
     /// line: [`Self::mask`].
     #[inline(always)]
-    pub(crate) fn finish(&mut self, image: &GreyView<'_>, det: &EdgeDetector) {
+    pub(crate) fn finish(&mut self, image: &GreyImage<'_>, det: &EdgeDetector) {
         let n = self.lines;
         if n == 0 {
             return;
@@ -390,7 +392,7 @@ fn gather(data: &[f32], width: usize, cell: &[i32], top: &mut [f32], bottom: &mu
 }
 
 /// Bilinear interpolation of the cells at the fractions (`fx`, `fy`), into `s`, as
-/// `GreyView::lerp`.
+/// `image::lerp`.
 #[inline(always)]
 fn interpolate(top: &[f32], bottom: &[f32], fx: &[f32], fy: &[f32], s: &mut [f32]) {
     let n = s.len();

@@ -2,10 +2,11 @@
 //! clutter on each measurement line; and Wu Eq. 11–12: the occlusion mixture with γ.
 
 use serde::{Deserialize, Serialize};
+use vision_core::GreyImage;
 
 use crate::math::{LnFactorial, log_add_exp};
 use crate::odobez::{Batch, check_len, ensure_workspace, run_batch};
-use crate::{Affine2, Contour, Error, GreyView, LineSettings, MeasurementLines, Result, Template};
+use crate::{Affine2, Contour, Error, LineSettings, MeasurementLines, Result, Template};
 
 /// The largest window W in units of σ accepted by [`WuSettings::validate`].
 const MAX_WINDOW_PER_SIGMA: f64 = 50.0;
@@ -385,7 +386,7 @@ impl WuLikelihood {
     pub fn line_terms(
         &self,
         ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         pose: &Affine2,
         lambda: f64,
         out: &mut [LineTerms],
@@ -409,7 +410,7 @@ impl WuLikelihood {
     fn extract(
         &self,
         ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         pose: &Affine2,
     ) -> Result<()> {
         ensure_workspace(ws, &self.settings.lines)?;
@@ -423,7 +424,7 @@ impl WuLikelihood {
     pub fn log_likelihood(
         &self,
         ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         pose: &Affine2,
         lambda: f64,
     ) -> Result<f64> {
@@ -442,7 +443,7 @@ impl WuLikelihood {
     fn sum_lines<F>(
         &self,
         ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         pose: &Affine2,
         mut line: F,
     ) -> Result<f64>
@@ -450,6 +451,7 @@ impl WuLikelihood {
         F: FnMut(usize, &[f64], f64) -> f64,
     {
         ensure_workspace(ws, &self.settings.lines)?;
+        crate::image::check_samplable(image)?;
         if !pose.is_finite() {
             return Err(Error::NonFinite {
                 what: "pose",
@@ -478,7 +480,7 @@ impl WuLikelihood {
     pub fn log_likelihood_batch(
         &self,
         ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         poses: &[Affine2],
         lambdas: &[f64],
         out: &mut [f64],
@@ -497,7 +499,7 @@ impl WuLikelihood {
     /// As [`Self::log_likelihood_batch`].
     pub fn log_likelihood_batch_par(
         &self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         poses: &[Affine2],
         lambdas: &[f64],
         out: &mut [f64],
@@ -549,7 +551,7 @@ impl OcclusionLikelihood {
     pub fn log_likelihood(
         &self,
         ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         pose: &Affine2,
         lambda: f64,
         gamma: f64,
@@ -574,7 +576,7 @@ impl OcclusionLikelihood {
     pub fn log_likelihood_batch(
         &self,
         ws: &mut MeasurementLines,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         poses: &[Affine2],
         lambdas: &[f64],
         gammas: &[f64],
@@ -594,7 +596,7 @@ impl OcclusionLikelihood {
     /// As [`Self::log_likelihood_batch`].
     pub fn log_likelihood_batch_par(
         &self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         poses: &[Affine2],
         lambdas: &[f64],
         gammas: &[f64],

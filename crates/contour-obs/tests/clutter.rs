@@ -1,8 +1,9 @@
 //! Clutter learning on a generated image with three regions of known edge density.
 
-use contour_obs::{ClutterSettings, GreyView, learn_clutter, line_densities};
+use contour_obs::{ClutterSettings, learn_clutter, line_densities};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
+use vision_core::GreyImage;
 
 const BAND: usize = 700;
 const H: usize = 700;
@@ -64,7 +65,7 @@ fn recovers_three_region_densities_within_15_percent() {
     let reference: Vec<f64> = bands
         .iter()
         .map(|d| {
-            let v = GreyView::new(BAND, H, d).unwrap();
+            let v = GreyImage::new(BAND, H, d).unwrap();
             let s = ClutterSettings {
                 lines: 40_000,
                 ..settings
@@ -73,7 +74,7 @@ fn recovers_three_region_densities_within_15_percent() {
             dens.iter().sum::<f64>() / dens.len() as f64
         })
         .collect();
-    let image = GreyView::new(w, H, &whole).unwrap();
+    let image = GreyImage::new(w, H, &whole).unwrap();
     let model = learn_clutter(&[image], &settings, &mut rng).unwrap();
     eprintln!("reference {reference:?}\nlearnt {:?}", model.clusters);
     assert_eq!(model.clusters.len(), 3);

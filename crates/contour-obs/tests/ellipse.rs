@@ -1,10 +1,11 @@
 //! Ground truth on a synthetic ellipse: edge offsets and the maxima of the three likelihoods.
 
 use contour_obs::{
-    Affine2, GreyView, MeasurementLines, OcclusionLikelihood, OdobezLikelihood, OdobezSettings,
-    Template, WuLikelihood, WuSettings,
+    Affine2, MeasurementLines, OcclusionLikelihood, OdobezLikelihood, OdobezSettings, Template,
+    WuLikelihood, WuSettings,
 };
 use nalgebra::Vector2;
+use vision_core::GreyImage;
 
 const W: usize = 160;
 const H: usize = 120;
@@ -62,7 +63,7 @@ fn true_crossings(p: Vector2<f64>, n: Vector2<f64>) -> Vec<f64> {
 #[test]
 fn edge_offsets_within_a_quarter_pixel_of_the_true_boundary() {
     let data = ellipse_image();
-    let image = GreyView::new(W, H, &data).unwrap();
+    let image = GreyImage::new(W, H, &data).unwrap();
     let model = OdobezLikelihood::new(
         OdobezSettings {
             lines: contour_obs::LineSettings {
@@ -156,7 +157,7 @@ fn assert_argmax_is_truth(name: &str, grid: &[(f64, f64, f64, Affine2)], logl: &
 #[test]
 fn each_likelihood_is_maximised_at_the_true_transform() {
     let data = ellipse_image();
-    let image = GreyView::new(W, H, &data).unwrap();
+    let image = GreyImage::new(W, H, &data).unwrap();
     let g = grid();
     let poses: Vec<Affine2> = g.iter().map(|p| p.3).collect();
     let mut out = vec![0.0; poses.len()];
@@ -186,7 +187,7 @@ fn each_likelihood_is_maximised_at_the_true_transform() {
 #[test]
 fn batch_equals_single_and_occlusion_limits() {
     let data = ellipse_image();
-    let image = GreyView::new(W, H, &data).unwrap();
+    let image = GreyImage::new(W, H, &data).unwrap();
     let g = grid();
     let poses: Vec<Affine2> = g.iter().step_by(37).map(|p| p.3).collect();
     let lambdas: Vec<f64> = (0..poses.len()).map(|i| 0.01 + 0.01 * i as f64).collect();
@@ -220,9 +221,9 @@ fn batch_equals_single_and_occlusion_limits() {
 #[test]
 fn finite_everywhere_and_errors_carry_the_index() {
     let data = ellipse_image();
-    let image = GreyView::new(W, H, &data).unwrap();
+    let image = GreyImage::new(W, H, &data).unwrap();
     let flat = vec![90.0f32; W * H];
-    let flat = GreyView::new(W, H, &flat).unwrap();
+    let flat = GreyImage::new(W, H, &flat).unwrap();
     let odobez = OdobezLikelihood::new(OdobezSettings::default(), &Template::UnitCircle).unwrap();
     let wu = WuLikelihood::new(WuSettings::default(), &Template::UnitCircle).unwrap();
     let occ = OcclusionLikelihood::new(WuSettings::default(), &Template::UnitCircle).unwrap();
@@ -330,7 +331,7 @@ fn bspline_template_of_a_circle_finds_the_disc() {
             if x.hypot(y) <= 25.0 { 200.0 } else { 40.0 }
         })
         .collect();
-    let image = GreyView::new(w, h, &data).unwrap();
+    let image = GreyImage::new(w, h, &data).unwrap();
     let model = WuLikelihood::new(WuSettings::default(), &Template::ClosedBSpline(ctrl)).unwrap();
     let mut ws = model.workspace().unwrap();
     let mut best = (f64::NEG_INFINITY, 0.0, 0.0);

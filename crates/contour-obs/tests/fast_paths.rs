@@ -3,12 +3,13 @@
 //! fixed-point sampler), and Odobez's windowed nearest-edge search against Eq. 19 on all edges.
 
 use contour_obs::{
-    Affine2, EdgeDetector, EdgeSettings, GreyView, LineSettings, LineTerms, OcclusionLikelihood,
+    Affine2, Bilinear, EdgeDetector, EdgeSettings, LineSettings, LineTerms, OcclusionLikelihood,
     OdobezLikelihood, OdobezSettings, Template, WuLikelihood, WuSettings, occlusion_line_log,
     odobez_line_log_term,
 };
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
+use vision_core::GreyImage;
 
 /// The benchmark's scene generator (only its clutter image is used here).
 #[path = "../examples/common/frame.rs"]
@@ -47,10 +48,10 @@ fn poses(rng: &mut Pcg64Mcg, n: usize) -> Vec<Affine2> {
         .collect()
 }
 
-/// Reference edges of one line: f32 positions c + k·n, `GreyView::sample`, the detector over the
+/// Reference edges of one line: f32 positions c + k·n, `GreyImage::sample`, the detector over the
 /// in-image run of offsets in [−reach, reach]. `None` when the line is unobserved.
 fn reference_edges(
-    image: &GreyView<'_>,
+    image: &GreyImage<'_>,
     det: &mut EdgeDetector,
     lines: &LineSettings,
     centre: (f64, f64),
@@ -83,7 +84,7 @@ fn reference_edges(
 fn extracted_edges_match_the_reference_within_1e_4_px() {
     let mut rng = Pcg64Mcg::seed_from_u64(11);
     let data = clutter_image(&mut rng);
-    let image = GreyView::new(W, H, &data).unwrap();
+    let image = GreyImage::new(W, H, &data).unwrap();
     let settings = OdobezSettings {
         lines: LineSettings {
             n_lines: 40,
@@ -125,7 +126,7 @@ fn extracted_edges_match_the_reference_within_1e_4_px() {
 fn odobez_window_search_equals_eq19_on_all_edges() {
     let mut rng = Pcg64Mcg::seed_from_u64(12);
     let data = clutter_image(&mut rng);
-    let image = GreyView::new(W, H, &data).unwrap();
+    let image = GreyImage::new(W, H, &data).unwrap();
     let ps = poses(&mut rng, 200);
     // Floors and σ that put the search radius at 0 (K = 1), 2, 4 (default), 7 and the whole
     // line (K tiny); and a line shorter than the search.
@@ -165,7 +166,7 @@ fn odobez_window_search_equals_eq19_on_all_edges() {
 fn occlusion_sum_equals_the_mixture_of_line_terms() {
     let mut rng = Pcg64Mcg::seed_from_u64(13);
     let data = clutter_image(&mut rng);
-    let image = GreyView::new(W, H, &data).unwrap();
+    let image = GreyImage::new(W, H, &data).unwrap();
     let wu = WuLikelihood::new(WuSettings::default(), &Template::UnitCircle).unwrap();
     let occ = OcclusionLikelihood::new(WuSettings::default(), &Template::UnitCircle).unwrap();
     let mut ws = wu.workspace().unwrap();
@@ -194,7 +195,7 @@ fn wu_counting_path_equals_the_sum_of_line_terms_bit_for_bit() {
     // arithmetic in the same order: the same bits, also for lines over the border.
     let mut rng = Pcg64Mcg::seed_from_u64(15);
     let data = clutter_image(&mut rng);
-    let image = GreyView::new(W, H, &data).unwrap();
+    let image = GreyImage::new(W, H, &data).unwrap();
     for window in [8.0, 3.0, 20.0] {
         let settings = WuSettings {
             lines: LineSettings {
@@ -228,7 +229,7 @@ fn wu_counting_path_equals_the_sum_of_line_terms_bit_for_bit() {
 fn parallel_batches_are_bit_identical_to_sequential() {
     let mut rng = Pcg64Mcg::seed_from_u64(14);
     let data = clutter_image(&mut rng);
-    let image = GreyView::new(W, H, &data).unwrap();
+    let image = GreyImage::new(W, H, &data).unwrap();
     // 75 poses: several rayon chunks and a partial last one.
     let ps = poses(&mut rng, 75);
     let lambdas: Vec<f64> = (0..ps.len()).map(|i| 0.005 * (i + 1) as f64).collect();

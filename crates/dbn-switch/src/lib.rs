@@ -67,5 +67,7 @@ pub use filter::ForwardResult;
 pub use markov::{MarkovChain, ROW_SUM_TOLERANCE, validate_matrix};
 pub use occlusion::{OcclusionConfig, OcclusionEstimate, OcclusionProcess, OcclusionState};
 pub use smooth::SmoothedChain;
-pub use status::{GammaRange, Status, StatusConfig, StatusEstimate, StatusHmm, StatusState};
+pub use status::{GammaRange, StatusConfig, StatusEstimate, StatusHmm, StatusState};
 pub use switching::SwitchingConfig;
+/// The tracker status α, shared with the rest of the workspace.
+pub use vision_core::TrackStatus;

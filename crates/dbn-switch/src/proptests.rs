@@ -6,7 +6,7 @@ use rand_pcg::Pcg64Mcg;
 
 use crate::{
     ClutterConfig, ClutterHmm, ClutterState, MarkovChain, OcclusionConfig, OcclusionProcess,
-    OcclusionState, Status, StatusConfig, StatusHmm, StatusState,
+    OcclusionState, StatusConfig, StatusHmm, StatusState, TrackStatus,
 };
 
 /// A random row-stochastic `n × n` matrix with strictly positive entries.
@@ -58,7 +58,7 @@ proptest! {
         prop_assert!(walk.log_transition(&prev, &next).is_finite());
 
         let status = StatusHmm::new(&StatusConfig::default()).unwrap();
-        let prev = StatusState { alpha: Status::ALL[beta], gamma };
+        let prev = StatusState { alpha: TrackStatus::ALL[beta], gamma };
         let next = status.sample_next(&prev, &mut rng);
         prop_assert!(status.range(next.alpha).contains(next.gamma));
         prop_assert!(status.log_transition(&prev, &next).is_finite());

@@ -8,44 +8,12 @@
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
+use vision_core::TrackStatus;
 
 use crate::config::ConfigFile;
 use crate::error::{Error, Result};
 use crate::estimate::{accumulate_classes, argmax, check_weights, weighted_mean};
 use crate::markov::{MarkovChain, sample_categorical, validate_matrix};
-
-/// The tracker status `α`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Status {
-    /// The target is tracked; `γ` is small (Wu: `α = 1`).
-    Locked,
-    /// The target is partially occluded; `γ` spreads over a wide range (Wu: `α = 2`).
-    PartiallyOccluded,
-    /// The tracker has lost the target; `γ` is large (Wu: `α = 3`).
-    Lost,
-}
-
-impl Status {
-    /// All statuses in index order.
-    pub const ALL: [Status; 3] = [Status::Locked, Status::PartiallyOccluded, Status::Lost];
-
-    /// 0-based index: row and column of `T_α`.
-    #[must_use]
-    pub fn index(self) -> usize {
-        match self {
-            Status::Locked => 0,
-            Status::PartiallyOccluded => 1,
-            Status::Lost => 2,
-        }
-    }
-
-    /// The status with a 0-based index, if any.
-    #[must_use]
-    pub fn from_index(index: usize) -> Option<Self> {
-        Self::ALL.get(index).copied()
-    }
-}
 
 /// A closed interval `[low, high] ⊆ [0, 1]` for `γ | α`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -101,11 +69,11 @@ pub struct StatusConfig {
     pub lost: GammaRange,
     /// The status at the first frame. Default: locked, since a tracker starts on its target.
     #[serde(default = "default_initial_status")]
-    pub initial_status: Status,
+    pub initial_status: TrackStatus,
 }
 
-fn default_initial_status() -> Status {
-    Status::Locked
+fn default_initial_status() -> TrackStatus {
+    TrackStatus::Locked
 }
 
 impl Default for StatusConfig {
@@ -128,7 +96,7 @@ impl Default for StatusConfig {
                 low: 0.8,
                 high: 1.0,
             },
-            initial_status: Status::Locked,
+            initial_status: TrackStatus::Locked,
         }
     }
 }
@@ -136,11 +104,11 @@ impl Default for StatusConfig {
 impl StatusConfig {
     /// The `γ` range of a status.
     #[must_use]
-    pub fn range(&self, status: Status) -> GammaRange {
+    pub fn range(&self, status: TrackStatus) -> GammaRange {
         match status {
-            Status::Locked => self.locked,
-            Status::PartiallyOccluded => self.partially_occluded,
-            Status::Lost => self.lost,
+            TrackStatus::Locked => self.locked,
+            TrackStatus::PartiallyOccluded => self.partially_occluded,
+            TrackStatus::Lost => self.lost,
         }
     }
 
@@ -152,10 +120,10 @@ impl StatusConfig {
     /// `[1, 0.9]` among them).
     pub fn validate(&self) -> Result<()> {
         validate_matrix(&self.transition)?;
-        if self.transition.len() != Status::ALL.len() {
+        if self.transition.len() != TrackStatus::ALL.len() {
             return Err(Error::DimensionMismatch {
                 name: "status transition matrix".to_owned(),
-                expected: Status::ALL.len(),
+                expected: TrackStatus::ALL.len(),
                 got: self.transition.len(),
             });
         }
@@ -175,7 +143,7 @@ impl ConfigFile for StatusConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct StatusState {
     /// Tracker status `α`.
-    pub alpha: Status,
+    pub alpha: TrackStatus,
     /// Degree of occlusion `γ ∈ [0, 1]`, emitted by `α`.
     pub gamma: f64,
 }
@@ -184,8 +152,8 @@ pub struct StatusState {
 #[derive(Debug, Clone, PartialEq)]
 pub struct StatusEstimate {
     /// `α̂ = argmax_k Σ_{n: α_n = k} π_n`, as `β̂` in Wu §4.
-    pub alpha_hat: Status,
-    /// Posterior status probabilities, indexed by [`Status::index`].
+    pub alpha_hat: TrackStatus,
+    /// Posterior status probabilities, indexed by [`TrackStatus::index`].
     pub alpha_probs: [f64; 3],
     /// `γ̂ = Σ_n γ_n π_n` (Wu Eq. 14).
     pub gamma_hat: f64,
@@ -196,7 +164,7 @@ pub struct StatusEstimate {
 pub struct StatusHmm {
     chain: MarkovChain,
     ranges: [GammaRange; 3],
-    initial: Status,
+    initial: TrackStatus,
 }
 
 impl StatusHmm {
@@ -207,12 +175,12 @@ impl StatusHmm {
     ///
     /// # Examples
     /// ```
-    /// use dbn_switch::{Status, StatusConfig, StatusHmm};
+    /// use dbn_switch::{TrackStatus, StatusConfig, StatusHmm};
     /// use rand::SeedableRng;
     /// let hmm = StatusHmm::new(&StatusConfig::default())?;
     /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
     /// let first = hmm.sample_initial(&mut rng);
-    /// assert_eq!(first.alpha, Status::Locked);
+    /// assert_eq!(first.alpha, TrackStatus::Locked);
     /// assert!(first.gamma <= 0.2);
     /// let next = hmm.sample_next(&first, &mut rng);
     /// assert!(hmm.log_transition(&first, &next).is_finite());
@@ -222,7 +190,7 @@ impl StatusHmm {
         config.validate()?;
         Ok(Self {
             chain: MarkovChain::new(&config.transition)?,
-            ranges: Status::ALL.map(|s| config.range(s)),
+            ranges: TrackStatus::ALL.map(|s| config.range(s)),
             initial: config.initial_status,
         })
     }
@@ -235,12 +203,12 @@ impl StatusHmm {
 
     /// The `γ` range `[a_α, b_α]` of a status.
     #[must_use]
-    pub fn range(&self, alpha: Status) -> GammaRange {
+    pub fn range(&self, alpha: TrackStatus) -> GammaRange {
         self.ranges[alpha.index()]
     }
 
     /// Draws `γ | α ~ U[a_α, b_α]`.
-    pub fn sample_gamma<R: Rng + ?Sized>(&self, alpha: Status, rng: &mut R) -> f64 {
+    pub fn sample_gamma<R: Rng + ?Sized>(&self, alpha: TrackStatus, rng: &mut R) -> f64 {
         let r = self.range(alpha);
         let u: f64 = rng.random();
         r.low + (r.high - r.low) * u
@@ -248,7 +216,7 @@ impl StatusHmm {
 
     /// `ln p(γ | α)`: `−ln(b_α − a_α)` inside the closed range, `−∞` outside, NaN for NaN.
     #[must_use]
-    pub fn log_gamma_density(&self, alpha: Status, gamma: f64) -> f64 {
+    pub fn log_gamma_density(&self, alpha: TrackStatus, gamma: f64) -> f64 {
         let r = self.range(alpha);
         if gamma.is_nan() {
             f64::NAN
@@ -274,7 +242,7 @@ impl StatusHmm {
             .chain
             .row(previous.alpha.index())
             .map(|row| sample_categorical(row, rng))
-            .and_then(Status::from_index)
+            .and_then(TrackStatus::from_index)
             .unwrap_or(previous.alpha);
         StatusState {
             alpha,
@@ -334,7 +302,8 @@ impl StatusHmm {
             &mut alpha_probs,
         )?;
         let gamma_hat = weighted_mean("gamma", states.iter().map(|s| s.gamma), weights)?;
-        let alpha_hat = Status::from_index(argmax(&alpha_probs)).unwrap_or(Status::Locked);
+        let alpha_hat =
+            TrackStatus::from_index(argmax(&alpha_probs)).unwrap_or(TrackStatus::Locked);
         Ok(StatusEstimate {
             alpha_hat,
             alpha_probs,
@@ -450,7 +419,7 @@ mod tests {
         let mut rng = Pcg64Mcg::seed_from_u64(31);
         let n = 20_000;
         let bound = KS_BOUND_COEFF / (n as f64).sqrt();
-        for alpha in Status::ALL {
+        for alpha in TrackStatus::ALL {
             let r = hmm.range(alpha);
             let mut draws: Vec<f64> = (0..n).map(|_| hmm.sample_gamma(alpha, &mut rng)).collect();
             assert!(draws.iter().all(|&g| r.contains(g)));
@@ -465,11 +434,11 @@ mod tests {
     fn log_transition_and_estimate() {
         let hmm = StatusHmm::new(&StatusConfig::default()).unwrap();
         let prev = StatusState {
-            alpha: Status::PartiallyOccluded,
+            alpha: TrackStatus::PartiallyOccluded,
             gamma: 0.5,
         };
         let next = StatusState {
-            alpha: Status::Locked,
+            alpha: TrackStatus::Locked,
             gamma: 0.15,
         };
         assert_relative_eq!(
@@ -478,31 +447,31 @@ mod tests {
             epsilon = 1e-15
         );
         let outside = StatusState {
-            alpha: Status::Locked,
+            alpha: TrackStatus::Locked,
             gamma: 0.5,
         };
         assert_eq!(hmm.log_transition(&prev, &outside), f64::NEG_INFINITY);
 
         let states = [
             StatusState {
-                alpha: Status::Locked,
+                alpha: TrackStatus::Locked,
                 gamma: 0.1,
             },
             StatusState {
-                alpha: Status::Lost,
+                alpha: TrackStatus::Lost,
                 gamma: 0.9,
             },
             StatusState {
-                alpha: Status::Lost,
+                alpha: TrackStatus::Lost,
                 gamma: 1.0,
             },
             StatusState {
-                alpha: Status::PartiallyOccluded,
+                alpha: TrackStatus::PartiallyOccluded,
                 gamma: 0.5,
             },
         ];
         let e = hmm.estimate(&states, &[0.45, 0.2, 0.2, 0.15]).unwrap();
-        assert_eq!(e.alpha_hat, Status::Locked);
+        assert_eq!(e.alpha_hat, TrackStatus::Locked);
         for (got, want) in e.alpha_probs.iter().zip([0.45, 0.15, 0.4]) {
             assert_relative_eq!(*got, want, epsilon = 1e-15);
         }

@@ -6,9 +6,9 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use motion_est::{
-    FrameBuffers, ImageView, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Settings,
-    Workspace,
+    FrameBuffers, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Settings, Workspace,
 };
+use vision_core::GreyImage;
 
 #[path = "../examples/common/pair.rs"]
 mod pair;
@@ -30,11 +30,11 @@ fn region(size: usize) -> Region<'static> {
 fn bench(c: &mut Criterion) {
     let (f0, f1) = pair(0.03);
     let (t0, t1) = pair(0.0);
-    let v0 = ImageView::new(W, H, &f0).unwrap();
-    let v1 = ImageView::new(W, H, &f1).unwrap();
+    let v0 = GreyImage::new(W, H, &f0).unwrap();
+    let v1 = GreyImage::new(W, H, &f1).unwrap();
     let (tv0, tv1) = (
-        ImageView::new(W, H, &t0).unwrap(),
-        ImageView::new(W, H, &t1).unwrap(),
+        GreyImage::new(W, H, &t0).unwrap(),
+        GreyImage::new(W, H, &t1).unwrap(),
     );
     let est = MotionEstimator::new(Settings::default()).unwrap();
 

@@ -8,9 +8,9 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use motion_est::{
-    FrameBuffers, ImageView, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Settings,
-    Workspace,
+    FrameBuffers, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Settings, Workspace,
 };
+use vision_core::GreyImage;
 
 #[path = "common/pair.rs"]
 mod pair;
@@ -43,8 +43,8 @@ fn main() {
         .build()
         .unwrap();
     let (f0, f1) = pair(0.03);
-    let v0 = ImageView::new(W, H, &f0).unwrap();
-    let v1 = ImageView::new(W, H, &f1).unwrap();
+    let v0 = GreyImage::new(W, H, &f0).unwrap();
+    let v1 = GreyImage::new(W, H, &f1).unwrap();
     let spec = ModelSpec::new(MotionModel::Affine, false);
     pool.install(|| match case.as_str() {
         "full" => {

@@ -7,6 +7,9 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
+    /// An invalid grey image (empty, wrong length, or a non-finite pixel).
+    #[error(transparent)]
+    Image(#[from] vision_core::Error),
     /// An image or mask has zero width or height.
     #[error("{what} is empty ({width}×{height})")]
     Empty {

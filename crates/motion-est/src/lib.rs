@@ -11,14 +11,15 @@
 //! * [`odobez_state_derivative`]: Eq. 15, affine parameters → (Ṫx, Ṫy, ṡ, ė) with covariance.
 //! * [`sample_patch_into`], [`ncc_distance`]: Eq. 22–23.
 //!
-//! Images are borrowed [`ImageView`]s (row-major f32 grey levels, x right, y down, pixel (i, j)
+//! Images are borrowed [`vision_core::GreyImage`]s (row-major f32 grey levels, x right, y down, pixel (i, j)
 //! centred at (i, j)). For many regions on the same frame pair, build both pyramids once with
 //! [`MotionEstimator::build_pyramid_into`] and call [`MotionEstimator::estimate`] per region with
 //! one [`Workspace`].
 //!
 //! # Example
 //! ```
-//! use motion_est::{ImageView, ModelSpec, MotionEstimator, MotionModel, Region, Settings};
+//! use motion_est::{ModelSpec, MotionEstimator, MotionModel, Region, Settings};
+//! use vision_core::GreyImage;
 //! // A smooth texture and a copy shifted by (1.5, −0.75) px.
 //! let (w, h) = (96, 80);
 //! let tex = |x: f64, y: f64| 128.0 + 40.0 * (0.31 * x + 0.1 * y).sin() + 30.0 * (0.23 * y - 0.05 * x).cos();
@@ -26,8 +27,8 @@
 //! let f1: Vec<f32> = (0..w * h).map(|k| tex((k % w) as f64 - 1.5, (k / w) as f64 + 0.75) as f32).collect();
 //! let est = MotionEstimator::new(Settings::default())?;
 //! let r = est.estimate_images(
-//!     ImageView::new(w, h, &f0)?,
-//!     ImageView::new(w, h, &f1)?,
+//!     GreyImage::new(w, h, &f0)?,
+//!     GreyImage::new(w, h, &f1)?,
 //!     &Region::Full,
 //!     ModelSpec::new(MotionModel::Translation, false),
 //!     None,
@@ -43,7 +44,6 @@
 
 pub mod error;
 pub mod estimator;
-pub mod image;
 mod meat;
 pub mod model;
 mod occlusion;
@@ -57,7 +57,6 @@ mod simd;
 
 pub use error::{Error, Result};
 pub use estimator::{FrameBuffers, MotionEstimate, MotionEstimator, Request, Settings, Workspace};
-pub use image::ImageView;
 pub use model::{ModelSpec, MotionModel};
 pub use odobez::odobez_state_derivative;
 pub use patch::{
@@ -65,5 +64,5 @@ pub use patch::{
     unit_disc_grid,
 };
 pub use pyramid::{Level, Pyramid, Window};
-pub use region::{Ellipse, MaskView, Region};
+pub use region::{MaskView, Region};
 pub use robust::RobustFunction;

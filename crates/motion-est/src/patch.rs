@@ -3,8 +3,8 @@
 //! d_c = 1 − ρ built on the normalised cross-correlation coefficient ρ (Eq. 23).
 
 use nalgebra::Matrix2;
+use vision_core::GreyImage;
 
-use crate::image::ImageView;
 use crate::{Error, Result};
 
 /// A regular grid of reference points inside the unit disc (the reference contour of the shared
@@ -37,7 +37,7 @@ pub fn unit_disc_grid(n: usize) -> Vec<[f64; 2]> {
 /// [`Error::DimensionMismatch`] when `out` and `grid` differ in length, [`Error::NonFinite`] for a
 /// NaN transform or a NaN pixel read.
 pub fn sample_patch_into(
-    image: ImageView<'_>,
+    image: GreyImage<'_>,
     grid: &[[f64; 2]],
     a: &Matrix2<f64>,
     t: [f64; 2],
@@ -97,7 +97,7 @@ pub fn sample_patch_into(
 /// # Errors
 /// As [`sample_patch_into`].
 pub fn sample_patch(
-    image: ImageView<'_>,
+    image: GreyImage<'_>,
     grid: &[[f64; 2]],
     a: &Matrix2<f64>,
     t: [f64; 2],
@@ -223,7 +223,7 @@ mod tests {
         let data: Vec<f32> = (0..w * h)
             .map(|k| (2 * (k % w) + 3 * (k / w)) as f32)
             .collect();
-        let img = ImageView::new(w, h, &data).unwrap();
+        let img = GreyImage::new(w, h, &data).unwrap();
         let grid = [
             [0.0, 0.0],
             [1.0, 0.0],

@@ -5,7 +5,8 @@
 //! level-l pixel i has its centre at level-0 coordinate 2^l·i. Borders are clamped to the window,
 //! which equals clamping to the image where the window touches the image border.
 
-use crate::image::ImageView;
+use vision_core::GreyImage;
+
 use crate::simd::simd;
 use crate::{Error, Result};
 
@@ -103,7 +104,7 @@ impl Pyramid {
     /// # Errors
     /// As [`build_into`](Self::build_into).
     pub fn build(
-        image: ImageView<'_>,
+        image: GreyImage<'_>,
         window: Option<Window>,
         levels: usize,
         presmooth: bool,
@@ -117,11 +118,11 @@ impl Pyramid {
     /// pyramid's buffers. Levels whose window would be narrower than 2 pixels are not built.
     ///
     /// # Errors
-    /// [`Error::InvalidSetting`] for zero levels or a window outside the image, [`Error::NonFinite`]
-    /// for a NaN or infinite pixel inside the window.
+    /// [`Error::InvalidSetting`] for zero levels or a window outside the image. (A NaN or
+    /// infinite pixel cannot reach here: [`GreyImage::new`] rejects it.)
     pub fn build_into(
         &mut self,
-        image: ImageView<'_>,
+        image: GreyImage<'_>,
         window: Option<Window>,
         levels: usize,
         presmooth: bool,
@@ -146,7 +147,8 @@ impl Pyramid {
         if self.levels.len() < levels {
             self.levels.resize_with(levels, Level::default);
         }
-        // Level 0: copy the window (checking finiteness), then optionally pre-smooth.
+        // Level 0: copy the window (its pixels are finite: `GreyImage` checked them), then
+        // optionally pre-smooth.
         {
             let l0 = &mut self.levels[0];
             l0.x0 = win.x0;
@@ -157,14 +159,7 @@ impl Pyramid {
             let src = image.data();
             for j in 0..win.height {
                 let start = (win.y0 + j) * w + win.x0;
-                let row = &src[start..start + win.width];
-                if let Some(k) = row.iter().position(|v| !v.is_finite()) {
-                    return Err(Error::NonFinite {
-                        what: "image",
-                        index: start + k,
-                    });
-                }
-                l0.data.extend_from_slice(row);
+                l0.data.extend_from_slice(&src[start..start + win.width]);
             }
             let tmp = &mut self.tmp;
             simd(
@@ -379,7 +374,7 @@ mod tests {
         // away from the clamped border, and level-l pixel i sits at level-0 coordinate 2^l·i.
         let (w, h) = (64, 48);
         let data = ramp(w, h);
-        let img = ImageView::new(w, h, &data).unwrap();
+        let img = GreyImage::new(w, h, &data).unwrap();
         let p = Pyramid::build(img, None, 3, true).unwrap();
         assert_eq!(p.levels(), 3);
         let l2 = p.level(2).unwrap();
@@ -399,7 +394,7 @@ mod tests {
         let data: Vec<f32> = (0..w * h)
             .map(|k| ((k % w) as f32 * 0.37).sin() * 50.0 + ((k / w) as f32 * 0.23).cos() * 40.0)
             .collect();
-        let img = ImageView::new(w, h, &data).unwrap();
+        let img = GreyImage::new(w, h, &data).unwrap();
         let full = Pyramid::build(img, None, 3, true).unwrap();
         let win = Window::around(40, 30, 60, 50, 24, w, h);
         let part = Pyramid::build(img, Some(win), 3, true).unwrap();
@@ -415,15 +410,13 @@ mod tests {
 
     #[test]
     fn nan_is_reported_with_its_index() {
+        // The view rejects the NaN at construction, before any pyramid is built.
         let mut data = ramp(8, 8);
         data[19] = f32::NAN;
-        let img = ImageView::new(8, 8, &data).unwrap();
+        let err = Error::from(GreyImage::new(8, 8, &data).unwrap_err());
         assert_eq!(
-            Pyramid::build(img, None, 2, true).unwrap_err(),
-            Error::NonFinite {
-                what: "image",
-                index: 19
-            }
+            err,
+            Error::Image(vision_core::Error::NonFinite { index: 19 })
         );
     }
 }

@@ -1,21 +1,8 @@
 //! Support regions: the whole frame, a rectangle, an ellipse, or a weight mask.
 
-use crate::{Error, Result};
+use vision_core::Ellipse;
 
-/// An ellipse (cx, cy, a, b, θ): semi-axis `a` along (cos θ, sin θ), `b` along (−sin θ, cos θ).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Ellipse {
-    /// Centre x.
-    pub cx: f64,
-    /// Centre y.
-    pub cy: f64,
-    /// Semi-axis along (cos θ, sin θ).
-    pub a: f64,
-    /// Semi-axis along (−sin θ, cos θ).
-    pub b: f64,
-    /// Orientation in radians.
-    pub theta: f64,
-}
+use crate::{Error, Result};
 
 /// A borrowed per-pixel weight mask in [0, 1], the same size as the images; 0 excludes a pixel.
 #[derive(Debug, Clone, Copy)]
@@ -158,7 +145,7 @@ impl Region<'_> {
                 Ok(())
             }
             Region::Ellipse(e) => {
-                for (index, v) in [e.cx, e.cy, e.a, e.b, e.theta].into_iter().enumerate() {
+                for (index, v) in [e.cx, e.cy, e.a, e.b, e.angle].into_iter().enumerate() {
                     if !v.is_finite() {
                         return Err(Error::NonFinite {
                             what: "ellipse",
@@ -203,7 +190,7 @@ impl Region<'_> {
                 (xr, yr)
             }
             Region::Ellipse(e) => {
-                let (s, c) = e.theta.sin_cos();
+                let (s, c) = e.angle.sin_cos();
                 let hx = (e.a * e.a * c * c + e.b * e.b * s * s).sqrt();
                 let hy = (e.a * e.a * s * s + e.b * e.b * c * c).sqrt();
                 (
@@ -256,7 +243,7 @@ impl Region<'_> {
                 }
             }
             Region::Ellipse(e) => {
-                let (s, c) = e.theta.sin_cos();
+                let (s, c) = e.angle.sin_cos();
                 let (dx, dy) = (x - e.cx, y - e.cy);
                 let u = (c * dx + s * dy) / e.a;
                 let v = (-s * dx + c * dy) / e.b;
@@ -331,7 +318,7 @@ mod tests {
             cy: 40.0,
             a: 20.0,
             b: 8.0,
-            theta: 0.6,
+            angle: 0.6,
         });
         let b = e.pixel_box(200, 200).unwrap();
         let mut count = 0;

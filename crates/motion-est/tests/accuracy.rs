@@ -10,9 +10,8 @@
 mod common;
 
 use common::*;
-use motion_est::{
-    FrameBuffers, ImageView, ModelSpec, MotionEstimator, MotionModel, Region, Settings,
-};
+use motion_est::{FrameBuffers, ModelSpec, MotionEstimator, MotionModel, Region, Settings};
+use vision_core::GreyImage;
 
 const W: usize = 320;
 const H: usize = 240;
@@ -49,7 +48,7 @@ fn run_with(
         let f0 = noisy(&c0, 2.0, 1000 * seed + 2 * d);
         let f1 = noisy(&c1, 2.0, 1000 * seed + 2 * d + 1);
         for (p, f) in [(&mut bufs.pyramid0, &f0), (&mut bufs.pyramid1, &f1)] {
-            est.build_pyramid_into(ImageView::new(W, H, f).unwrap(), p)
+            est.build_pyramid_into(GreyImage::new(W, H, f).unwrap(), p)
                 .unwrap();
         }
         let r = est

@@ -22,9 +22,10 @@
 mod common;
 
 use common::Texture;
-use motion_est::{ImageView, ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region};
+use motion_est::{ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
+use vision_core::GreyImage;
 
 /// Sinusoids per texture (wavelengths uniform in 3–40 px).
 const COMPONENTS: usize = 120;
@@ -232,8 +233,8 @@ fn grid(scene: &Scene, side: usize, est: &MotionEstimator, seed: u64, draws: u64
                     let f1 = noisy(&c1, nseed + 1);
                     let r = est
                         .estimate_images(
-                            ImageView::new(scene.w, scene.h, &f0).unwrap(),
-                            ImageView::new(scene.w, scene.h, &f1).unwrap(),
+                            GreyImage::new(scene.w, scene.h, &f0).unwrap(),
+                            GreyImage::new(scene.w, scene.h, &f1).unwrap(),
                             &region,
                             spec,
                             Some(centre),

@@ -10,7 +10,8 @@
 mod common;
 
 use common::*;
-use motion_est::{ImageView, ModelSpec, MotionEstimator, MotionModel, Region, Settings};
+use motion_est::{ModelSpec, MotionEstimator, MotionModel, Region, Settings};
+use vision_core::GreyImage;
 
 const W: usize = 320;
 const H: usize = 240;
@@ -37,8 +38,8 @@ fn ratio_with(
         let f1 = noisy(&c1, 2.0, 7001 + 2 * d);
         let r = est
             .estimate_images(
-                ImageView::new(W, H, &f0).unwrap(),
-                ImageView::new(W, H, &f1).unwrap(),
+                GreyImage::new(W, H, &f0).unwrap(),
+                GreyImage::new(W, H, &f1).unwrap(),
                 &region,
                 ModelSpec::new(MotionModel::Affine, false),
                 Some(origin),

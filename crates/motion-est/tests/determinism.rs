@@ -5,9 +5,8 @@
 mod common;
 
 use common::*;
-use motion_est::{
-    Ellipse, ImageView, ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region, Settings,
-};
+use motion_est::{ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region, Settings};
+use vision_core::{Ellipse, GreyImage};
 
 const W: usize = 320;
 const H: usize = 240;
@@ -42,7 +41,7 @@ fn full_frame_estimate_is_bit_identical_with_one_or_two_threads() {
         cy: 110.0,
         a: 90.0,
         b: 70.0,
-        theta: 0.3,
+        angle: 0.3,
     });
     for (region, spec) in [
         (Region::Full, ModelSpec::new(MotionModel::Affine, false)),
@@ -51,8 +50,8 @@ fn full_frame_estimate_is_bit_identical_with_one_or_two_threads() {
     ] {
         let run = || {
             est.estimate_images(
-                ImageView::new(W, H, &f0).unwrap(),
-                ImageView::new(W, H, &f1).unwrap(),
+                GreyImage::new(W, H, &f0).unwrap(),
+                GreyImage::new(W, H, &f1).unwrap(),
                 &region,
                 spec,
                 Some(origin),

@@ -7,7 +7,9 @@
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
-use crate::edges::{EdgeDetector, GrayView, edge_density, random_segments};
+use vision_core::GreyImage;
+
+use crate::edges::{EdgeDetector, edge_density, random_segments};
 use crate::error::{Error, Result};
 use crate::params::{BackgroundParams, ClutterClass};
 use crate::texture::{Shape, smooth_noise};
@@ -100,7 +102,7 @@ impl Background {
             // Painting is sequential, so growing the count only paints the new structures on
             // top; shrinking it repaints the region from the base.
             let mut painted = 0usize;
-            let mut measure = |n: usize| -> f64 {
+            let mut measure = |n: usize| -> Result<f64> {
                 if n < painted {
                     for y in 0..height {
                         let row = y * width;
@@ -112,18 +114,14 @@ impl Background {
                     s.paint(&mut data, width, clip, *g);
                 }
                 painted = n;
-                edge_density(
-                    &GrayView {
-                        width,
-                        height,
-                        data: &data,
-                    },
+                Ok(edge_density(
+                    &GreyImage::new(width, height, &data)?,
                     &segments,
                     &det,
-                )
+                ))
             };
             let n = calibrated_count(&mut measure, requested, n_max, class.index())?;
-            let measured = measure(n);
+            let measured = measure(n)?;
             regions.push(Region {
                 x0,
                 x1,
@@ -154,12 +152,12 @@ impl Background {
     }
 
     /// Borrowed view of the texture.
-    pub fn view(&self) -> GrayView<'_> {
-        GrayView {
-            width: self.width,
-            height: self.height,
-            data: &self.data,
-        }
+    ///
+    /// # Errors
+    /// [`Error::GreyImage`] for a texture that is empty or holds a non-finite value, which
+    /// [`Background::generate`] never builds.
+    pub fn view(&self) -> Result<GreyImage<'_>> {
+        Ok(GreyImage::new(self.width, self.height, &self.data)?)
     }
 }
 
@@ -203,19 +201,19 @@ fn region_structures(
 /// # Errors
 /// [`Error::Calibration`] when even `n_max` structures stay below the requested density.
 fn calibrated_count(
-    measure: &mut impl FnMut(usize) -> f64,
+    measure: &mut impl FnMut(usize) -> Result<f64>,
     requested: f64,
     n_max: usize,
     class: u8,
 ) -> Result<usize> {
     let tol = CALIBRATION_TOLERANCE * requested;
-    let mut lo = (0usize, measure(0));
+    let mut lo = (0usize, measure(0)?);
     let mut best = lo;
     let mut hi = None;
     if lo.1 < requested - tol {
         let mut n = (n_max / 64).max(1);
         loop {
-            let l = measure(n);
+            let l = measure(n)?;
             if (l - requested).abs() < (best.1 - requested).abs() {
                 best = (n, l);
             }
@@ -251,7 +249,7 @@ fn calibrated_count(
             stalled = 0;
         }
         let mid = mid.clamp(lo.0 + 1, h.0 - 1);
-        let l = measure(mid);
+        let l = measure(mid)?;
         if (l - requested).abs() < (best.1 - requested).abs() {
             best = (mid, l);
         }

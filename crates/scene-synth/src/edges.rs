@@ -7,6 +7,7 @@
 //! around the maximum. Edge density λ = edges per pixel of line (W §3, §6.1).
 
 use rand::Rng;
+use vision_core::GreyImage;
 
 /// Settings of the 1-D edge detector.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -84,37 +85,30 @@ impl EdgeDetector {
     }
 }
 
-/// A borrowed grey image: row-major f32 grey levels.
-#[derive(Debug, Clone, Copy)]
-pub struct GrayView<'a> {
-    /// Width (px).
-    pub width: usize,
-    /// Height (px).
-    pub height: usize,
-    /// Row-major samples, `width * height` of them.
-    pub data: &'a [f32],
+/// Bilinear sample of `img` at (x, y), clamped at the border (a point outside reads the nearest
+/// border value); an image one pixel wide or high is interpolated along its other axis only.
+pub fn bilinear(img: &GreyImage<'_>, x: f64, y: f64) -> f64 {
+    bilinear_raw(img.width(), img.height(), img.data(), x, y)
 }
 
-impl GrayView<'_> {
-    /// Bilinear sample with clamping at the border.
-    pub fn bilinear(&self, x: f64, y: f64) -> f64 {
-        let xm = (self.width - 1) as f64;
-        let ym = (self.height - 1) as f64;
-        let x = x.clamp(0.0, xm);
-        let y = y.clamp(0.0, ym);
-        let x0 = (x.floor() as usize).min(self.width.saturating_sub(2));
-        let y0 = (y.floor() as usize).min(self.height.saturating_sub(2));
-        let fx = x - x0 as f64;
-        let fy = y - y0 as f64;
-        let i = y0 * self.width + x0;
-        let x1 = if self.width > 1 { 1 } else { 0 };
-        let y1 = if self.height > 1 { self.width } else { 0 };
-        let p00 = f64::from(self.data[i]);
-        let p10 = f64::from(self.data[i + x1]);
-        let p01 = f64::from(self.data[i + y1]);
-        let p11 = f64::from(self.data[i + x1 + y1]);
-        (p00 * (1.0 - fx) + p10 * fx) * (1.0 - fy) + (p01 * (1.0 - fx) + p11 * fx) * fy
-    }
+/// [`bilinear`] on a row-major buffer of `width * height` values, both sides at least 1.
+pub(crate) fn bilinear_raw(width: usize, height: usize, data: &[f32], x: f64, y: f64) -> f64 {
+    let xm = (width - 1) as f64;
+    let ym = (height - 1) as f64;
+    let x = x.clamp(0.0, xm);
+    let y = y.clamp(0.0, ym);
+    let x0 = (x.floor() as usize).min(width.saturating_sub(2));
+    let y0 = (y.floor() as usize).min(height.saturating_sub(2));
+    let fx = x - x0 as f64;
+    let fy = y - y0 as f64;
+    let i = y0 * width + x0;
+    let x1 = if width > 1 { 1 } else { 0 };
+    let y1 = if height > 1 { width } else { 0 };
+    let p00 = f64::from(data[i]);
+    let p10 = f64::from(data[i + x1]);
+    let p01 = f64::from(data[i + y1]);
+    let p11 = f64::from(data[i + x1 + y1]);
+    (p00 * (1.0 - fx) + p10 * fx) * (1.0 - fy) + (p01 * (1.0 - fx) + p11 * fx) * fy
 }
 
 /// A measurement segment from `p0` to `p1` (image coordinates).
@@ -146,7 +140,7 @@ pub struct EdgeScratch {
 /// that the whole segment is testable, and only edges whose position lies in [0, length) count,
 /// which makes the density estimate unbiased.
 pub fn count_edges(
-    img: &GrayView<'_>,
+    img: &GreyImage<'_>,
     seg: &Segment,
     det: &EdgeDetector,
     s: &mut EdgeScratch,
@@ -166,7 +160,7 @@ pub fn count_edges(
     for i in 0..n + 2 * ext {
         let t = i as f64 - ext as f64;
         s.profile
-            .push(img.bilinear(seg.p0[0] + t * dx, seg.p0[1] + t * dy));
+            .push(bilinear(img, seg.p0[0] + t * dx, seg.p0[1] + t * dy));
     }
     det.detect(&s.profile, &s.kernel, &mut s.response, &mut s.edges);
     s.edges
@@ -179,7 +173,7 @@ pub fn count_edges(
 }
 
 /// Measured edge density (edges per pixel of line) over a set of segments.
-pub fn edge_density(img: &GrayView<'_>, segments: &[Segment], det: &EdgeDetector) -> f64 {
+pub fn edge_density(img: &GreyImage<'_>, segments: &[Segment], det: &EdgeDetector) -> f64 {
     let mut s = EdgeScratch::default();
     let mut edges = 0usize;
     let mut length = 0.0;
@@ -318,11 +312,7 @@ mod tests {
         let data: Vec<f32> = (0..w * h)
             .map(|i| if ((i % w) / 6) % 2 == 0 { 40.0 } else { 200.0 })
             .collect();
-        let img = GrayView {
-            width: w,
-            height: h,
-            data: &data,
-        };
+        let img = GreyImage::new(w, h, &data).unwrap();
         let seg = Segment {
             p0: [10.2, 10.0],
             p1: [106.2, 10.0],

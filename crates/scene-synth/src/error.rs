@@ -6,6 +6,9 @@ use std::path::PathBuf;
 #[non_exhaustive]
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
+    /// An invalid grey image (empty, wrong length, or a non-finite pixel).
+    #[error(transparent)]
+    GreyImage(#[from] vision_core::Error),
     /// A scenario parameter is out of its documented range (or NaN).
     #[error("invalid parameter `{name}`: {reason}")]
     InvalidParameter {

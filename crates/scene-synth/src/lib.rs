@@ -51,12 +51,12 @@ mod writer;
 mod readme_doctest {}
 
 pub use error::{Error, Result};
-pub use geometry::{BoxRect, Ellipse, OdobezState, WuAffine};
+pub use geometry::{OdobezState, WuAffine, point_and_normal};
 pub use params::{
     BackgroundParams, CameraParams, ClutterClass, ClutterParams, DistractorParams, HeadTurnParams,
     JumpParams, MotionParams, OccluderParams, ScaleChangeParams, Scenario, ScenarioParams,
     StatusThresholds, TargetParams,
 };
 pub use render::{Scene, to_f32};
-pub use truth::{FrameTruth, Status};
+pub use truth::FrameTruth;
 pub use writer::write_sequence;

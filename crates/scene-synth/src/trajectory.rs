@@ -4,8 +4,8 @@ use std::f64::consts::PI;
 
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
+use vision_core::Ellipse;
 
-use crate::geometry::Ellipse;
 use crate::params::{Scenario, ScenarioParams};
 
 /// The camera: texture point shown at the frame centre and the zoom factor

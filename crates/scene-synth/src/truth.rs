@@ -2,41 +2,22 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::geometry::{BoxRect, Ellipse, OdobezState, WuAffine};
+use vision_core::{BoundingBox, Ellipse, TrackStatus};
+
+use crate::geometry::{OdobezState, WuAffine};
 use crate::params::StatusThresholds;
 
-/// Tracker status label derived from the visible fraction v (Wu's α, W §6.3). With γ ≈ 1 − v and
-/// Wu's γ ranges (locked γ ∈ [0, 0.2], lost γ ∈ [0.8, 1]): locked if v ≥ 0.8, lost if v ≤ 0.2,
-/// partial in between (thresholds in [`StatusThresholds`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Status {
-    /// Mostly visible.
-    Locked,
-    /// Partially occluded.
-    Partial,
-    /// (Almost) fully occluded or out of the frame.
-    Lost,
-}
-
-impl Status {
-    /// The label for a visible fraction.
-    pub fn from_visible(v: f64, t: &StatusThresholds) -> Self {
-        if v >= t.locked_min_visible {
-            Status::Locked
-        } else if v <= t.lost_max_visible {
-            Status::Lost
+impl StatusThresholds {
+    /// The status label of a visible fraction v (Wu's α, W §6.3). With γ ≈ 1 − v and Wu's γ
+    /// ranges (locked γ ∈ [0, 0.2], lost γ ∈ [0.8, 1]): locked if v ≥ 0.8, lost if v ≤ 0.2,
+    /// partially occluded in between (the thresholds of `self`).
+    pub fn status(&self, v: f64) -> TrackStatus {
+        if v >= self.locked_min_visible {
+            TrackStatus::Locked
+        } else if v <= self.lost_max_visible {
+            TrackStatus::Lost
         } else {
-            Status::Partial
-        }
-    }
-
-    /// Lowercase name, as written in the CSV.
-    pub fn name(self) -> &'static str {
-        match self {
-            Status::Locked => "locked",
-            Status::Partial => "partial",
-            Status::Lost => "lost",
+            TrackStatus::PartiallyOccluded
         }
     }
 }
@@ -53,7 +34,7 @@ pub struct FrameTruth {
     /// Wu's affine shape space.
     pub affine: WuAffine,
     /// Axis-aligned bounding box of the ellipse.
-    pub bbox: BoxRect,
+    pub bbox: BoundingBox,
     /// Clutter class (Wu's β, 1–3) of the background region under the target's centre.
     pub clutter_class: u8,
     /// Edge density of that region in this frame (edges/px): the density measured at
@@ -63,7 +44,7 @@ pub struct FrameTruth {
     /// occluder (anti-aliased coverage).
     pub visible_fraction: f64,
     /// Status label from the visible fraction.
-    pub status: Status,
+    pub status: TrackStatus,
     /// The distractor's outline, if the scenario has one.
     pub distractor: Option<Ellipse>,
 }
@@ -125,11 +106,11 @@ mod tests {
     #[test]
     fn status_thresholds_follow_wu_gamma_ranges() {
         let t = StatusThresholds::default();
-        assert_eq!(Status::from_visible(1.0, &t), Status::Locked);
-        assert_eq!(Status::from_visible(0.8, &t), Status::Locked);
-        assert_eq!(Status::from_visible(0.79, &t), Status::Partial);
-        assert_eq!(Status::from_visible(0.21, &t), Status::Partial);
-        assert_eq!(Status::from_visible(0.2, &t), Status::Lost);
-        assert_eq!(Status::from_visible(0.0, &t), Status::Lost);
+        assert_eq!(t.status(1.0), TrackStatus::Locked);
+        assert_eq!(t.status(0.8), TrackStatus::Locked);
+        assert_eq!(t.status(0.79), TrackStatus::PartiallyOccluded);
+        assert_eq!(t.status(0.21), TrackStatus::PartiallyOccluded);
+        assert_eq!(t.status(0.2), TrackStatus::Lost);
+        assert_eq!(t.status(0.0), TrackStatus::Lost);
     }
 }

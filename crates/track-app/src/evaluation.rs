@@ -5,11 +5,10 @@
 use rayon::prelude::*;
 use scene_synth::{FrameTruth, Scenario, ScenarioParams, Scene};
 use trackers::{Preset, SmootherSettings, SwitchingStatistics, TrackerConfig};
+use vision_core::{BoundingBox, Ellipse, first_failure};
 
-use crate::groundtruth::{Box2, Ellipse};
-use crate::metrics::first_failure;
-use crate::record::{FrameRecord, TrackerStatus};
-use crate::sequence::{Frame, GrayFrame, Original};
+use crate::record::FrameRecord;
+use crate::sequence::{Frame, Original, grey_from_luma8};
 use crate::session::{DrawOptions, Session, SessionOutput};
 use crate::{AppError, Result};
 
@@ -59,11 +58,7 @@ impl SyntheticSequence {
             out.frames.push(Frame {
                 index: k,
                 name: format!("{}#{}", out.name, k + 1),
-                gray: GrayFrame {
-                    width: img.width() as usize,
-                    height: img.height() as usize,
-                    data: scene_synth::to_f32(&img),
-                },
+                grey: grey_from_luma8(&img),
                 original: Original::Luma(img),
             });
             out.truth.push(truth);
@@ -72,10 +67,8 @@ impl SyntheticSequence {
     }
 
     /// The true box of frame `k`.
-    pub fn truth_box(&self, k: usize) -> Option<Box2> {
-        self.truth
-            .get(k)
-            .map(|t| Box2::new(t.bbox.x, t.bbox.y, t.bbox.w, t.bbox.h))
+    pub fn truth_box(&self, k: usize) -> Option<BoundingBox> {
+        self.truth.get(k).map(|t| t.bbox)
     }
 
     /// The true ellipse of the first frame, where trackers start.
@@ -84,8 +77,7 @@ impl SyntheticSequence {
             .truth
             .first()
             .ok_or_else(|| AppError::setting("--frames", "the scene has no frame"))?;
-        let e = t.ellipse;
-        Ok(Ellipse::new(e.cx, e.cy, e.a, e.b, e.angle))
+        Ok(t.ellipse)
     }
 
     /// Tracks the whole sequence with `config`, starting from the true first ellipse.
@@ -353,10 +345,7 @@ pub fn switching_scores(
     let alpha = mean(
         pairs
             .iter()
-            .filter_map(|(r, t)| {
-                r.alpha_hat
-                    .map(|a| f64::from(u8::from(a == truth_status(t))))
-            })
+            .filter_map(|(r, t)| r.alpha_hat.map(|a| f64::from(u8::from(a == t.status))))
             .collect(),
     );
     let ious = seq.ious(records);
@@ -367,14 +356,6 @@ pub fn switching_scores(
         gamma_mae: gamma,
         alpha_accuracy: alpha,
         mean_iou: ious.iter().sum::<f64>() / ious.len().max(1) as f64,
-    }
-}
-
-fn truth_status(t: &FrameTruth) -> TrackerStatus {
-    match t.status {
-        scene_synth::Status::Locked => TrackerStatus::Locked,
-        scene_synth::Status::Partial => TrackerStatus::Partial,
-        scene_synth::Status::Lost => TrackerStatus::Lost,
     }
 }
 

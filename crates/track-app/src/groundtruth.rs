@@ -7,69 +7,12 @@
 
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
+use vision_core::{BoundingBox, Ellipse};
 
 use crate::{AppError, Result};
 
-/// An axis-aligned box: top-left corner `(x, y)`, width `w` and height `h`, in pixels
-/// (x to the right, y down).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct Box2 {
-    /// Left edge.
-    pub x: f64,
-    /// Top edge.
-    pub y: f64,
-    /// Width.
-    pub w: f64,
-    /// Height.
-    pub h: f64,
-}
-
-impl Box2 {
-    /// A box from its top-left corner and size.
-    pub fn new(x: f64, y: f64, w: f64, h: f64) -> Self {
-        Self { x, y, w, h }
-    }
-
-    /// The centre `(x + w/2, y + h/2)`.
-    pub fn centre(&self) -> (f64, f64) {
-        (self.x + 0.5 * self.w, self.y + 0.5 * self.h)
-    }
-
-    /// The area `w·h` (zero for a degenerate box).
-    pub fn area(&self) -> f64 {
-        self.w.max(0.0) * self.h.max(0.0)
-    }
-
-    /// Whether all four numbers are finite.
-    pub fn is_finite(&self) -> bool {
-        self.x.is_finite() && self.y.is_finite() && self.w.is_finite() && self.h.is_finite()
-    }
-
-    /// Intersection over union with `other`, in [0, 1]; 0 when the union is empty.
-    pub fn iou(&self, other: &Box2) -> f64 {
-        let ix = (self.x + self.w).min(other.x + other.w) - self.x.max(other.x);
-        let iy = (self.y + self.h).min(other.y + other.h) - self.y.max(other.y);
-        let inter = ix.max(0.0) * iy.max(0.0);
-        let union = self.area() + other.area() - inter;
-        if union > 0.0 { inter / union } else { 0.0 }
-    }
-
-    /// Euclidean distance between the two centres, in pixels.
-    pub fn centre_distance(&self, other: &Box2) -> f64 {
-        let (ax, ay) = self.centre();
-        let (bx, by) = other.centre();
-        (ax - bx).hypot(ay - by)
-    }
-
-    /// The ellipse inscribed in the box: centre at the box centre, semi-axes `a = w/2` (horizontal)
-    /// and `b = h/2`, angle 0 (docs/MODELS.md: the tracker starts from the ellipse inscribed in the
-    /// first labelled box).
-    pub fn inscribed_ellipse(&self) -> Ellipse {
-        let (cx, cy) = self.centre();
-        Ellipse::new(cx, cy, 0.5 * self.w, 0.5 * self.h, 0.0)
-    }
-
+/// The command line's checks of a box against a frame, and its compact form for messages.
+pub trait BoxInFrame {
     /// Checks that the box can start a tracker in a `width`×`height` frame: finite, of positive
     /// width and height, and with its centre inside the frame (a box may stick out of the frame
     /// partly, as real targets near the border do, but not lie outside it). `what` names the box in
@@ -77,17 +20,26 @@ impl Box2 {
     ///
     /// # Errors
     /// [`AppError::InvalidSetting`] naming `what`, the box and the frame size.
-    pub fn validate_in_frame(&self, width: usize, height: usize, what: &str) -> Result<()> {
+    fn validate_in_frame(&self, width: usize, height: usize, what: &str) -> Result<()>;
+
+    /// The check of [`BoxInFrame::validate_in_frame`], returning what is wrong as text, so that
+    /// the caller can say whose box it is (an option, or a line of a ground-truth file).
+    ///
+    /// # Errors
+    /// The reason, with the box written compactly ([`fmt_num`]) and the frame size.
+    fn check_in_frame(&self, width: usize, height: usize) -> std::result::Result<(), String>;
+
+    /// `x,y,w,h` written compactly for messages ([`fmt_num`]).
+    fn shown(&self) -> String;
+}
+
+impl BoxInFrame for BoundingBox {
+    fn validate_in_frame(&self, width: usize, height: usize, what: &str) -> Result<()> {
         self.check_in_frame(width, height)
             .map_err(|reason| AppError::setting(what, reason))
     }
 
-    /// The check of [`Box2::validate_in_frame`], returning what is wrong as text, so that the
-    /// caller can say whose box it is (an option, or a line of a ground-truth file).
-    ///
-    /// # Errors
-    /// The reason, with the box written compactly ([`fmt_num`]) and the frame size.
-    pub fn check_in_frame(&self, width: usize, height: usize) -> std::result::Result<(), String> {
+    fn check_in_frame(&self, width: usize, height: usize) -> std::result::Result<(), String> {
         let shown = self.shown();
         if !self.is_finite() {
             return Err(format!("box {shown} is not finite"));
@@ -104,8 +56,7 @@ impl Box2 {
         Ok(())
     }
 
-    /// `x,y,w,h` written compactly for messages ([`fmt_num`]).
-    pub fn shown(&self) -> String {
+    fn shown(&self) -> String {
         [self.x, self.y, self.w, self.h].map(fmt_num).join(",")
     }
 }
@@ -118,60 +69,6 @@ pub fn fmt_num(v: f64) -> String {
         format!("{v}")
     } else {
         format!("{v:e}")
-    }
-}
-
-/// An ellipse (cx, cy, a, b, θ): semi-axis `a` along (cos θ, sin θ), `b` along (−sin θ, cos θ),
-/// angle in radians (the workspace convention).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct Ellipse {
-    /// Centre, x.
-    pub cx: f64,
-    /// Centre, y.
-    pub cy: f64,
-    /// Semi-axis along the angle direction.
-    pub a: f64,
-    /// Semi-axis perpendicular to it.
-    pub b: f64,
-    /// Angle of the `a` axis from the x axis, radians.
-    pub angle: f64,
-}
-
-impl Ellipse {
-    /// An ellipse from its five parameters.
-    pub fn new(cx: f64, cy: f64, a: f64, b: f64, angle: f64) -> Self {
-        Self {
-            cx,
-            cy,
-            a,
-            b,
-            angle,
-        }
-    }
-
-    /// Whether all five numbers are finite.
-    pub fn is_finite(&self) -> bool {
-        self.cx.is_finite()
-            && self.cy.is_finite()
-            && self.a.is_finite()
-            && self.b.is_finite()
-            && self.angle.is_finite()
-    }
-
-    /// The axis-aligned bounding box of the rotated ellipse (the tracker's box, docs/MODELS.md).
-    /// Half-extents: `sqrt(a²cos²θ + b²sin²θ)` and `sqrt(a²sin²θ + b²cos²θ)`.
-    pub fn bounding_box(&self) -> Box2 {
-        let (s, c) = self.angle.sin_cos();
-        let hx = ((self.a * c).powi(2) + (self.b * s).powi(2)).sqrt();
-        let hy = ((self.a * s).powi(2) + (self.b * c).powi(2)).sqrt();
-        Box2::new(self.cx - hx, self.cy - hy, 2.0 * hx, 2.0 * hy)
-    }
-
-    /// The point at parameter `t` (radians): centre + a·cos t·(cos θ, sin θ) + b·sin t·(−sin θ, cos θ).
-    pub fn point(&self, t: f64) -> (f64, f64) {
-        let (s, c) = self.angle.sin_cos();
-        let (u, v) = (self.a * t.cos(), self.b * t.sin());
-        (self.cx + u * c - v * s, self.cy + u * s + v * c)
     }
 }
 
@@ -196,13 +93,13 @@ fn parse_numbers<const N: usize>(text: &str, name: &str, form: &str) -> Result<[
 }
 
 /// Parses a box given on the command line as `x,y,w,h` (for `--init`). The size is checked
-/// against the frame later, by [`Box2::validate_in_frame`].
+/// against the frame later, by [`BoxInFrame::validate_in_frame`].
 ///
 /// # Errors
 /// [`AppError::InvalidSetting`] naming `name` (the option): wrong count or a non-finite number.
-pub fn parse_box_arg(text: &str, name: &str) -> Result<Box2> {
+pub fn parse_box_arg(text: &str, name: &str) -> Result<BoundingBox> {
     let [x, y, w, h] = parse_numbers(text, name, "x,y,w,h")?;
-    Ok(Box2::new(x, y, w, h))
+    Ok(BoundingBox::new(x, y, w, h))
 }
 
 /// Parses an ellipse given on the command line as `cx,cy,a,b,angle` (for `--init-ellipse`); the
@@ -226,11 +123,11 @@ pub fn parse_ellipse_arg(text: &str, name: &str) -> Result<Ellipse> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum GtLine {
     /// A box of positive size.
-    Box(Box2),
+    Box(BoundingBox),
     /// `0,0,0,0`: the OTB mark of an unlabelled frame.
     Unlabelled,
     /// Any other box of zero width or height: no target on this frame.
-    ZeroSize(Box2),
+    ZeroSize(BoundingBox),
 }
 
 /// Parses one ground-truth line (1-based `line_no` for messages).
@@ -268,9 +165,9 @@ fn parse_line(text: &str, line_no: usize) -> std::result::Result<GtLine, String>
         return Ok(GtLine::Unlabelled);
     }
     if w == 0.0 || h == 0.0 {
-        return Ok(GtLine::ZeroSize(Box2::new(x, y, w, h)));
+        return Ok(GtLine::ZeroSize(BoundingBox::new(x, y, w, h)));
     }
-    Ok(GtLine::Box(Box2::new(x, y, w, h)))
+    Ok(GtLine::Box(BoundingBox::new(x, y, w, h)))
 }
 
 /// Parses the text of a ground-truth file: one entry per line, `None` for unlabelled frames.
@@ -285,7 +182,7 @@ fn parse_line(text: &str, line_no: usize) -> std::result::Result<GtLine, String>
 /// # Errors
 /// [`AppError::BadInput`] naming `path` and the 1-based line number: wrong field count, a field
 /// that is not a finite number, a negative size, a zero-size box before the first labelled one.
-pub fn parse_groundtruth(text: &str, path: &Path) -> Result<Vec<Option<Box2>>> {
+pub fn parse_groundtruth(text: &str, path: &Path) -> Result<Vec<Option<BoundingBox>>> {
     let lines: Vec<&str> = text.lines().collect();
     let last = lines.iter().rposition(|l| !l.trim().is_empty());
     let Some(last) = last else {
@@ -325,7 +222,7 @@ pub fn parse_groundtruth(text: &str, path: &Path) -> Result<Vec<Option<Box2>>> {
 ///
 /// # Errors
 /// [`AppError::BadInput`] when the file cannot be read or a line is malformed.
-pub fn load_groundtruth(path: &Path) -> Result<Vec<Option<Box2>>> {
+pub fn load_groundtruth(path: &Path) -> Result<Vec<Option<BoundingBox>>> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| AppError::input(path, format!("cannot read ground truth: {e}")))?;
     parse_groundtruth(&text, path)
@@ -335,7 +232,11 @@ pub fn load_groundtruth(path: &Path) -> Result<Vec<Option<Box2>>> {
 ///
 /// # Errors
 /// [`AppError::BadInput`] naming `path` and both counts.
-pub fn check_groundtruth_len(truth: &[Option<Box2>], frames: usize, path: &Path) -> Result<()> {
+pub fn check_groundtruth_len(
+    truth: &[Option<BoundingBox>],
+    frames: usize,
+    path: &Path,
+) -> Result<()> {
     if truth.len() != frames {
         return Err(AppError::input(
             path,
@@ -352,7 +253,7 @@ pub fn check_groundtruth_len(truth: &[Option<Box2>], frames: usize, path: &Path)
 }
 
 /// The first labelled frame and its box, if any.
-pub fn first_labelled(truth: &[Option<Box2>]) -> Option<(usize, Box2)> {
+pub fn first_labelled(truth: &[Option<BoundingBox>]) -> Option<(usize, BoundingBox)> {
     truth
         .iter()
         .enumerate()
@@ -367,12 +268,12 @@ pub fn first_labelled(truth: &[Option<Box2>]) -> Option<(usize, Box2)> {
 /// the sequence and what is wrong: no labelled box, or a first box that is not finite, has no
 /// area or lies outside the frame.
 pub fn first_box_in_frame(
-    truth: &[Option<Box2>],
+    truth: &[Option<BoundingBox>],
     path: &Path,
     sequence: &str,
     width: usize,
     height: usize,
-) -> Result<(usize, Box2)> {
+) -> Result<(usize, BoundingBox)> {
     let (k, b) = first_labelled(truth)
         .ok_or_else(|| AppError::input(path, "no labelled box (every line is 0,0,0,0)"))?;
     b.check_in_frame(width, height).map_err(|reason| {
@@ -402,14 +303,14 @@ mod tests {
         let text = "128,46,104,127\n0,0,0,0\n1\t2\t3\t4\n5 6  7 8\n9, 10, 11, 12\n\n\n";
         let gt = parse_groundtruth(text, p()).unwrap();
         assert_eq!(gt.len(), 5);
-        assert_eq!(gt[0], Some(Box2::new(128.0, 46.0, 104.0, 127.0)));
+        assert_eq!(gt[0], Some(BoundingBox::new(128.0, 46.0, 104.0, 127.0)));
         assert_eq!(gt[1], None);
-        assert_eq!(gt[2], Some(Box2::new(1.0, 2.0, 3.0, 4.0)));
-        assert_eq!(gt[3], Some(Box2::new(5.0, 6.0, 7.0, 8.0)));
-        assert_eq!(gt[4], Some(Box2::new(9.0, 10.0, 11.0, 12.0)));
+        assert_eq!(gt[2], Some(BoundingBox::new(1.0, 2.0, 3.0, 4.0)));
+        assert_eq!(gt[3], Some(BoundingBox::new(5.0, 6.0, 7.0, 8.0)));
+        assert_eq!(gt[4], Some(BoundingBox::new(9.0, 10.0, 11.0, 12.0)));
         assert_eq!(
             first_labelled(&gt),
-            Some((0, Box2::new(128.0, 46.0, 104.0, 127.0)))
+            Some((0, BoundingBox::new(128.0, 46.0, 104.0, 127.0)))
         );
     }
 
@@ -438,7 +339,7 @@ mod tests {
 
     #[test]
     fn length_check_and_all_unlabelled() {
-        let gt = vec![Some(Box2::new(0.0, 0.0, 1.0, 1.0)), None];
+        let gt = vec![Some(BoundingBox::new(0.0, 0.0, 1.0, 1.0)), None];
         assert!(check_groundtruth_len(&gt, 2, p()).is_ok());
         let msg = check_groundtruth_len(&gt, 3, p()).unwrap_err().to_string();
         assert!(msg.contains("2 ground-truth lines for 3 frames"), "{msg}");
@@ -447,22 +348,25 @@ mod tests {
 
     #[test]
     fn iou_and_centre_by_hand() {
-        let a = Box2::new(0.0, 0.0, 10.0, 10.0);
-        let b = Box2::new(5.0, 0.0, 10.0, 10.0);
+        let a = BoundingBox::new(0.0, 0.0, 10.0, 10.0);
+        let b = BoundingBox::new(5.0, 0.0, 10.0, 10.0);
         // Intersection 5×10 = 50, union 100 + 100 − 50 = 150.
         assert_relative_eq!(a.iou(&b), 50.0 / 150.0, epsilon = 1e-15);
         assert_relative_eq!(a.iou(&a), 1.0);
-        assert_eq!(a.iou(&Box2::new(20.0, 20.0, 1.0, 1.0)), 0.0);
+        assert_eq!(a.iou(&BoundingBox::new(20.0, 20.0, 1.0, 1.0)), 0.0);
         assert_eq!(a.centre(), (5.0, 5.0));
-        assert_relative_eq!(a.centre_distance(&Box2::new(3.0, 4.0, 10.0, 10.0)), 5.0);
+        assert_relative_eq!(
+            a.centre_distance(&BoundingBox::new(3.0, 4.0, 10.0, 10.0)),
+            5.0
+        );
         // Degenerate boxes have no union: defined as 0, never NaN.
-        let z = Box2::new(1.0, 1.0, 0.0, 0.0);
+        let z = BoundingBox::new(1.0, 1.0, 0.0, 0.0);
         assert_eq!(z.iou(&z), 0.0);
     }
 
     #[test]
     fn ellipse_box_round_trip_and_rotation() {
-        let b = Box2::new(128.0, 46.0, 104.0, 127.0);
+        let b = BoundingBox::new(128.0, 46.0, 104.0, 127.0);
         let e = b.inscribed_ellipse();
         assert_eq!(e, Ellipse::new(180.0, 109.5, 52.0, 63.5, 0.0));
         let back = e.bounding_box();
@@ -485,7 +389,7 @@ mod tests {
     fn command_line_boxes_and_ellipses() {
         assert_eq!(
             parse_box_arg("1, 2,3.5,4", "--init").unwrap(),
-            Box2::new(1.0, 2.0, 3.5, 4.0)
+            BoundingBox::new(1.0, 2.0, 3.5, 4.0)
         );
         let e = parse_ellipse_arg("10,20,5,3,0.5", "--init-ellipse").unwrap();
         assert_eq!(e, Ellipse::new(10.0, 20.0, 5.0, 3.0, 0.5));
@@ -507,23 +411,29 @@ mod tests {
 
     #[test]
     fn validation_against_the_frame() {
-        let ok = Box2::new(10.0, 10.0, 20.0, 20.0);
+        let ok = BoundingBox::new(10.0, 10.0, 20.0, 20.0);
         assert!(ok.validate_in_frame(320, 240, "--init").is_ok());
         // Partly outside is accepted (targets at the border).
         assert!(
-            Box2::new(-5.0, -5.0, 20.0, 20.0)
+            BoundingBox::new(-5.0, -5.0, 20.0, 20.0)
                 .validate_in_frame(320, 240, "--init")
                 .is_ok()
         );
         for (b, what) in [
-            (Box2::new(10.0, 10.0, 0.0, 20.0), "zero or negative size"),
-            (Box2::new(10.0, 10.0, 20.0, -1.0), "zero or negative size"),
             (
-                Box2::new(400.0, 10.0, 20.0, 20.0),
+                BoundingBox::new(10.0, 10.0, 0.0, 20.0),
+                "zero or negative size",
+            ),
+            (
+                BoundingBox::new(10.0, 10.0, 20.0, -1.0),
+                "zero or negative size",
+            ),
+            (
+                BoundingBox::new(400.0, 10.0, 20.0, 20.0),
                 "outside the 320×240 frame",
             ),
-            (Box2::new(10.0, -50.0, 20.0, 20.0), "outside"),
-            (Box2::new(f64::NAN, 1.0, 2.0, 2.0), "not finite"),
+            (BoundingBox::new(10.0, -50.0, 20.0, 20.0), "outside"),
+            (BoundingBox::new(f64::NAN, 1.0, 2.0, 2.0), "not finite"),
         ] {
             let err = b.validate_in_frame(320, 240, "--init").unwrap_err();
             let msg = err.to_string();

@@ -5,22 +5,19 @@
 //! - Success curve: for each IoU threshold t = 0, 0.05, …, 1 (21 values), the share of labelled
 //!   frames whose IoU is strictly above t (the OTB toolkit's convention, so a perfect tracker scores
 //!   0 at t = 1); its AUC is the mean of the 21 values.
-//! - Trial failure: a trial fails once the IoU stays below 0.2 for 5 consecutive labelled frames.
+//! - Trial failure: a trial fails once the IoU stays below 0.2 for 5 consecutive labelled frames
+//!   ([`vision_core::first_failure`]).
 //!
 //! Only labelled frames count: sequences labelled every k-th frame (`0,0,0,0` elsewhere) are
 //! evaluated on their labelled frames alone, and "consecutive" means consecutive labelled frames.
 
 use serde::{Deserialize, Serialize};
+use vision_core::{BoundingBox, first_failure};
 
-use crate::groundtruth::Box2;
 use crate::{AppError, Result};
 
 /// Centre-error threshold of the precision score, pixels.
 pub const PRECISION_THRESHOLD_PX: f64 = 20.0;
-/// IoU below which a labelled frame counts towards a trial failure.
-pub const FAILURE_IOU: f64 = 0.2;
-/// Number of consecutive labelled frames below [`FAILURE_IOU`] that make a trial fail.
-pub const FAILURE_RUN: usize = 5;
 /// Number of IoU thresholds of the success curve (0, 0.05, …, 1).
 pub const SUCCESS_STEPS: usize = 21;
 
@@ -47,19 +44,6 @@ pub fn success_curve(ious: &[f64]) -> [f64; SUCCESS_STEPS] {
 /// Area under the success curve: the mean of its values.
 pub fn success_auc(ious: &[f64]) -> f64 {
     success_curve(ious).iter().sum::<f64>() / SUCCESS_STEPS as f64
-}
-
-/// Position (in `ious`, the per-labelled-frame IoUs in order) at which a trial fails: the
-/// [`FAILURE_RUN`]-th consecutive IoU below [`FAILURE_IOU`]; `None` when it never fails.
-pub fn first_failure(ious: &[f64]) -> Option<usize> {
-    let mut run = 0;
-    for (i, &v) in ious.iter().enumerate() {
-        run = if v < FAILURE_IOU { run + 1 } else { 0 };
-        if run == FAILURE_RUN {
-            return Some(i);
-        }
-    }
-    None
 }
 
 /// Frames per second.
@@ -155,8 +139,8 @@ pub fn roc_auc(scored: &[(f64, bool)]) -> Option<f64> {
 /// `estimates` (as passed to [`evaluate`]), `None` when the tracker reports no status.
 pub fn with_self_evaluation(
     mut metrics: SequenceMetrics,
-    estimates: &[Box2],
-    truth: &[Option<Box2>],
+    estimates: &[BoundingBox],
+    truth: &[Option<BoundingBox>],
     p_lost: &[Option<f64>],
 ) -> SequenceMetrics {
     metrics.lost_scores = estimates
@@ -177,8 +161,8 @@ pub fn with_self_evaluation(
 /// [`AppError::Computation`] when the lengths differ, nothing is labelled, an estimate on a
 /// labelled frame is not finite (named by frame), or `seconds` is not positive.
 pub fn evaluate(
-    estimates: &[Box2],
-    truth: &[Option<Box2>],
+    estimates: &[BoundingBox],
+    truth: &[Option<BoundingBox>],
     seconds: Option<f64>,
 ) -> Result<SequenceMetrics> {
     let ctx = "evaluation";
@@ -332,9 +316,9 @@ mod tests {
 
     #[test]
     fn evaluate_skips_unlabelled_frames() {
-        let gt_box = Box2::new(0.0, 0.0, 10.0, 10.0);
-        let shifted = Box2::new(5.0, 0.0, 10.0, 10.0); // IoU 1/3, centre error 5
-        let far = Box2::new(100.0, 100.0, 10.0, 10.0); // IoU 0, centre error 100√2
+        let gt_box = BoundingBox::new(0.0, 0.0, 10.0, 10.0);
+        let shifted = BoundingBox::new(5.0, 0.0, 10.0, 10.0); // IoU 1/3, centre error 5
+        let far = BoundingBox::new(100.0, 100.0, 10.0, 10.0); // IoU 0, centre error 100√2
         // Unlabelled frames carry garbage estimates that must not count.
         let estimates = [gt_box, far, shifted, far, far];
         let truth = [Some(gt_box), None, Some(gt_box), Some(gt_box), None];
@@ -356,8 +340,8 @@ mod tests {
 
     #[test]
     fn evaluate_reports_failure_frame_and_bad_inputs() {
-        let gt = Box2::new(0.0, 0.0, 10.0, 10.0);
-        let far = Box2::new(50.0, 50.0, 10.0, 10.0);
+        let gt = BoundingBox::new(0.0, 0.0, 10.0, 10.0);
+        let far = BoundingBox::new(50.0, 50.0, 10.0, 10.0);
         // Labelled every other frame (0, 2, 4, …); the 5th labelled miss is at frame index 8.
         let estimates = vec![far; 12];
         let truth: Vec<_> = (0..12).map(|i| (i % 2 == 0).then_some(gt)).collect();
@@ -371,7 +355,7 @@ mod tests {
                 .to_string()
                 .contains("no labelled")
         );
-        let nan = Box2::new(f64::NAN, 0.0, 1.0, 1.0);
+        let nan = BoundingBox::new(f64::NAN, 0.0, 1.0, 1.0);
         let msg = evaluate(&[gt, nan], &[Some(gt), Some(gt)], None)
             .unwrap_err()
             .to_string();
@@ -385,9 +369,14 @@ mod tests {
 
     #[test]
     fn mean_over_sequences() {
-        let gt = Box2::new(0.0, 0.0, 10.0, 10.0);
+        let gt = BoundingBox::new(0.0, 0.0, 10.0, 10.0);
         let a = evaluate(&[gt], &[Some(gt)], Some(1.0)).unwrap();
-        let b = evaluate(&[Box2::new(40.0, 0.0, 10.0, 10.0)], &[Some(gt)], Some(0.5)).unwrap();
+        let b = evaluate(
+            &[BoundingBox::new(40.0, 0.0, 10.0, 10.0)],
+            &[Some(gt)],
+            Some(0.5),
+        )
+        .unwrap();
         let m = mean_metrics(&[a, b]).unwrap();
         assert_eq!(m.precision_20, 0.5);
         assert_relative_eq!(m.success_auc, 10.0 / 21.0, epsilon = 1e-15);

@@ -9,9 +9,10 @@
 use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
+use vision_core::TrackStatus;
 
 use crate::output::write_atomic;
-use crate::record::{FrameRecord, TrackerStatus};
+use crate::record::FrameRecord;
 use crate::render::{CLUTTER, LOCKED, LOST, PARTIAL};
 use crate::{AppError, Result};
 
@@ -403,7 +404,7 @@ pub fn plot_alpha(
     };
     let hat = hat_series(alpha_hat(records), smoothed.map(alpha_hat));
     let mut probs = Vec::new();
-    for (status, colour) in TrackerStatus::ALL.iter().zip([LOCKED, PARTIAL, LOST]) {
+    for (status, colour) in TrackStatus::ALL.iter().zip([LOCKED, PARTIAL, LOST]) {
         let mut points = Vec::new();
         for r in records {
             if let Some(&p) = r.alpha_probs.get(status.index()) {
@@ -425,7 +426,7 @@ pub fn plot_alpha(
             )?);
         }
     }
-    let names = TrackerStatus::ALL.map(TrackerStatus::name);
+    let names = TrackStatus::ALL.map(TrackStatus::name);
     let svg = render(
         &[
             ("tracker status α̂", "α̂", (-0.5, 2.5), Some(&names), hat),
@@ -526,7 +527,7 @@ pub fn write_figures(dir: &Path, figures: &[Figure]) -> Result<Vec<PathBuf>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::groundtruth::Ellipse;
+    use vision_core::Ellipse;
 
     fn records(full: bool) -> Vec<FrameRecord> {
         (0..40)
@@ -543,7 +544,7 @@ mod tests {
                     r.beta_probs = (0..3).map(|c| if c == b { 0.8 } else { 0.1 }).collect();
                     r.lambda_hat = Some([0.01, 0.0824, 0.2144][b]);
                     r.gamma_hat = Some(i as f64 / 40.0);
-                    r.alpha_hat = Some(TrackerStatus::ALL[b]);
+                    r.alpha_hat = Some(TrackStatus::ALL[b]);
                     r.alpha_probs = vec![0.6, 0.3, 0.1];
                 }
                 r

@@ -6,51 +6,11 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
+use vision_core::{BoundingBox, Ellipse, TrackStatus};
 
-use crate::groundtruth::{Box2, Ellipse};
 use crate::metrics::SequenceMetrics;
 use crate::output::write_atomic;
 use crate::{AppError, Result};
-
-/// The tracker's self-evaluation α (W §6.3): locked, partially occluded, or lost.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum TrackerStatus {
-    /// Locked on the target.
-    Locked,
-    /// Partially occluded.
-    Partial,
-    /// Lost.
-    Lost,
-}
-
-impl TrackerStatus {
-    /// All statuses in the order of their probabilities in [`FrameRecord::alpha_probs`].
-    pub const ALL: [TrackerStatus; 3] = [Self::Locked, Self::Partial, Self::Lost];
-
-    /// The lower-case name written to files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Locked => "locked",
-            Self::Partial => "partial",
-            Self::Lost => "lost",
-        }
-    }
-
-    /// The status with 0-based index `i` in [`TrackerStatus::ALL`].
-    pub fn from_index(i: usize) -> Option<Self> {
-        Self::ALL.get(i).copied()
-    }
-
-    /// The 0-based index in [`TrackerStatus::ALL`].
-    pub fn index(self) -> usize {
-        match self {
-            Self::Locked => 0,
-            Self::Partial => 1,
-            Self::Lost => 2,
-        }
-    }
-}
 
 /// What the tracker believed at one frame.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -60,7 +20,7 @@ pub struct FrameRecord {
     /// The estimated contour as an ellipse.
     pub ellipse: Ellipse,
     /// Its axis-aligned bounding box (the tracker's box, docs/MODELS.md).
-    pub bbox: Box2,
+    pub bbox: BoundingBox,
     /// Effective sample size of the weights before resampling.
     pub ess: f64,
     /// Estimated clutter class β̂ (0-based index into `beta_probs`), for switching trackers.
@@ -72,7 +32,7 @@ pub struct FrameRecord {
     /// Estimated occlusion γ̂ = E\[γ\] (W Eq. 14).
     pub gamma_hat: Option<f64>,
     /// Estimated tracker status α̂.
-    pub alpha_hat: Option<TrackerStatus>,
+    pub alpha_hat: Option<TrackStatus>,
     /// Posterior probability of locked, partial, lost (empty when there is no α).
     pub alpha_probs: Vec<f64>,
     /// Time spent on this frame, milliseconds.
@@ -255,7 +215,7 @@ pub fn csv_string_with(records: &[FrameRecord], columns: CsvColumns) -> Result<S
             match r.alpha_probs.len() {
                 0 => out.push_str(",,,"),
                 3 => {
-                    for (p, s) in r.alpha_probs.iter().zip(TrackerStatus::ALL) {
+                    for (p, s) in r.alpha_probs.iter().zip(TrackStatus::ALL) {
                         out.push(',');
                         num(&mut out, *p, f, &format!("alpha_p_{}", s.name()))?;
                     }
@@ -343,7 +303,7 @@ pub struct Summary {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frame_rate: Option<f64>,
     /// The box that initialised the tracker.
-    pub initial_box: Option<Box2>,
+    pub initial_box: Option<BoundingBox>,
     /// Total tracking time, seconds.
     pub seconds: f64,
     /// Frames per second.
@@ -452,10 +412,10 @@ mod tests {
     fn status_counts_need_a_status_process() {
         assert_eq!(status_counts(&[plain(0), plain(1)]), None);
         let statuses = [
-            TrackerStatus::Locked,
-            TrackerStatus::Lost,
-            TrackerStatus::Lost,
-            TrackerStatus::Partial,
+            TrackStatus::Locked,
+            TrackStatus::Lost,
+            TrackStatus::Lost,
+            TrackStatus::PartiallyOccluded,
         ];
         let records: Vec<FrameRecord> = statuses
             .iter()
@@ -486,7 +446,7 @@ mod tests {
         full.beta_probs = vec![0.1, 0.2, 0.7];
         full.lambda_hat = Some(0.0824);
         full.gamma_hat = Some(0.05);
-        full.alpha_hat = Some(TrackerStatus::Partial);
+        full.alpha_hat = Some(TrackStatus::PartiallyOccluded);
         full.alpha_probs = vec![0.25, 0.5, 0.25];
         let csv = csv_string(&[full, plain(1)]).unwrap();
         let lines: Vec<&str> = csv.lines().collect();
@@ -570,7 +530,7 @@ mod tests {
             fps: 50.2,
             mean_millis: 19.9,
             frame_rate: Some(25.0),
-            initial_box: Some(Box2::new(128.0, 46.0, 104.0, 127.0)),
+            initial_box: Some(BoundingBox::new(128.0, 46.0, 104.0, 127.0)),
             status_counts: Some([500, 2, 0]),
             outputs: vec!["track.csv".into()],
             interrupted: None,

@@ -15,10 +15,9 @@ use std::path::Path;
 use image::codecs::gif::{GifEncoder, Repeat};
 use image::codecs::png::PngEncoder;
 use image::{Delay, ExtendedColorType, ImageEncoder, RgbImage, RgbaImage};
+use vision_core::{BoundingBox, Ellipse, TrackStatus};
 
-use crate::groundtruth::{Box2, Ellipse};
 use crate::output::write_atomic;
-use crate::record::TrackerStatus;
 use crate::{AppError, Result};
 
 /// An 8-bit RGB colour.
@@ -36,11 +35,11 @@ pub const GROUND_TRUTH: Colour = [60, 200, 255];
 pub const CLUTTER: [Colour; 3] = [[60, 140, 255], [255, 220, 0], [230, 40, 200]];
 
 /// The contour colour of a tracker status: locked green, partial orange, lost red.
-pub fn status_colour(status: TrackerStatus) -> Colour {
+pub fn status_colour(status: TrackStatus) -> Colour {
     match status {
-        TrackerStatus::Locked => LOCKED,
-        TrackerStatus::Partial => PARTIAL,
-        TrackerStatus::Lost => LOST,
+        TrackStatus::Locked => LOCKED,
+        TrackStatus::PartiallyOccluded => PARTIAL,
+        TrackStatus::Lost => LOST,
     }
 }
 
@@ -80,7 +79,7 @@ pub struct Overlay {
     /// Likely particles as (contour, opacity in [0, 1]), drawn first and faintly in `colour`.
     pub particles: Vec<(Ellipse, f64)>,
     /// The ground-truth box, if known for this frame.
-    pub groundtruth: Option<Box2>,
+    pub groundtruth: Option<BoundingBox>,
     /// Widths.
     pub style: OverlayStyle,
 }
@@ -195,7 +194,7 @@ pub fn draw_ellipse(img: &mut RgbImage, e: &Ellipse, colour: Colour, alpha: f64,
 }
 
 /// Draws the outline of an axis-aligned box, antialiased.
-pub fn draw_box(img: &mut RgbImage, bx: &Box2, colour: Colour, alpha: f64, width: f64) {
+pub fn draw_box(img: &mut RgbImage, bx: &BoundingBox, colour: Colour, alpha: f64, width: f64) {
     if !bx.is_finite() || alpha.is_nan() || alpha <= 0.0 {
         return;
     }
@@ -384,7 +383,7 @@ mod tests {
         let frame = black(30, 30);
         let mut ov = Overlay::new(Ellipse::new(15.0, 15.0, 5.0, 5.0, 0.0), PARTIAL);
         ov.particles = vec![(Ellipse::new(15.0, 15.0, 10.0, 10.0, 0.0), 0.2)];
-        ov.groundtruth = Some(Box2::new(2.0, 2.0, 26.0, 26.0));
+        ov.groundtruth = Some(BoundingBox::new(2.0, 2.0, 26.0, 26.0));
         let out = render_overlay(&frame, &ov);
         assert_eq!(out.get_pixel(20, 15).0, PARTIAL);
         // Particle at 20 % of PARTIAL: round(0.2·255) = 51, round(0.2·150) = 30.
@@ -409,12 +408,18 @@ mod tests {
         }
         draw_box(
             &mut img,
-            &Box2::new(-5.0, -5.0, 100.0, f64::INFINITY),
+            &BoundingBox::new(-5.0, -5.0, 100.0, f64::INFINITY),
             LOST,
             1.0,
             1.0,
         );
-        draw_box(&mut img, &Box2::new(20.0, 20.0, 5.0, 5.0), LOST, 1.0, 1.0);
+        draw_box(
+            &mut img,
+            &BoundingBox::new(20.0, 20.0, 5.0, 5.0),
+            LOST,
+            1.0,
+            1.0,
+        );
         draw_ellipse(
             &mut black(0, 0),
             &Ellipse::new(0.0, 0.0, 1.0, 1.0, 0.0),

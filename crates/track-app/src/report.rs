@@ -191,10 +191,10 @@ pub fn write_report(path: &Path, input: &ReportInput) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::groundtruth::{Box2, Ellipse};
     use crate::metrics::evaluate;
     use crate::plots::all_figures;
     use crate::record::FrameRecord;
+    use vision_core::{BoundingBox, Ellipse};
 
     #[test]
     fn strip_indices_are_even_and_include_both_ends() {
@@ -216,8 +216,8 @@ mod tests {
         let records: Vec<FrameRecord> = (0..10)
             .map(|i| FrameRecord::new(i, Ellipse::new(20.0, 20.0, 5.0, 5.0, 0.0), 50.0, 1.0))
             .collect();
-        let gt = Box2::new(15.0, 15.0, 10.0, 10.0);
-        let boxes: Vec<Box2> = records.iter().map(|r| r.bbox).collect();
+        let gt = BoundingBox::new(15.0, 15.0, 10.0, 10.0);
+        let boxes: Vec<BoundingBox> = records.iter().map(|r| r.bbox).collect();
         let summary = Summary {
             sequence: "<synthetic>".into(),
             tracker: "full".into(),

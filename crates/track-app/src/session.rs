@@ -4,12 +4,12 @@
 //! and, when asked, draws the overlay of the frame (contour coloured by tracker status or clutter
 //! class, the likely particles faintly, the ground-truth box).
 
-use contour_obs::Ellipse as ContourEllipse;
 use image::RgbImage;
 use trackers::{Estimate, SmootherSettings, SwitchingStatistics, Tracker};
 
-use crate::groundtruth::{Box2, Ellipse};
-use crate::record::{FrameRecord, TrackerStatus};
+use vision_core::{BoundingBox, Ellipse, TrackStatus};
+
+use crate::record::FrameRecord;
 use crate::render::{Overlay, clutter_colour, render_overlay, status_colour};
 use crate::sequence::{Frame, Original};
 use crate::{AppError, Result};
@@ -44,45 +44,29 @@ impl Default for DrawOptions {
 
 /// Tracker status thresholds on γ̂ for trackers that estimate occlusion but not α: the ranges of
 /// Wu §6.3 (locked γ ≤ 0.2, lost γ ≥ 0.8, partially occluded between).
-pub fn status_from_gamma(gamma: f64) -> TrackerStatus {
+pub fn status_from_gamma(gamma: f64) -> TrackStatus {
     if gamma <= 0.2 {
-        TrackerStatus::Locked
+        TrackStatus::Locked
     } else if gamma < 0.8 {
-        TrackerStatus::Partial
+        TrackStatus::PartiallyOccluded
     } else {
-        TrackerStatus::Lost
+        TrackStatus::Lost
     }
 }
 
 /// The status shown for an estimate: α̂ when the tracker has the status HMM, else from γ̂, else
 /// locked.
-pub fn display_status(e: &Estimate) -> TrackerStatus {
+pub fn display_status(e: &Estimate) -> TrackStatus {
     if let Some(s) = &e.status {
-        return TrackerStatus::from_index(s.alpha_hat.index()).unwrap_or(TrackerStatus::Locked);
+        return s.alpha_hat;
     }
-    e.gamma.map_or(TrackerStatus::Locked, status_from_gamma)
-}
-
-/// Converts the library's ellipse to the command line's.
-pub fn app_ellipse(e: &ContourEllipse) -> Ellipse {
-    Ellipse::new(e.cx, e.cy, e.a, e.b, e.theta)
-}
-
-/// Converts the command line's ellipse to the library's.
-pub fn library_ellipse(e: &Ellipse) -> ContourEllipse {
-    ContourEllipse {
-        cx: e.cx,
-        cy: e.cy,
-        a: e.a,
-        b: e.b,
-        theta: e.angle,
-    }
+    e.gamma.map_or(TrackStatus::Locked, status_from_gamma)
 }
 
 /// The record of one estimate (frame index from the caller: the sequence's numbering).
 pub fn record_of(frame: usize, e: &Estimate) -> FrameRecord {
-    let mut r = FrameRecord::new(frame, app_ellipse(&e.ellipse), e.ess, e.millis);
-    r.bbox = Box2::new(e.bbox[0], e.bbox[1], e.bbox[2], e.bbox[3]);
+    let mut r = FrameRecord::new(frame, e.ellipse, e.ess, e.millis);
+    r.bbox = e.bbox;
     if let Some(c) = &e.clutter {
         r.beta_hat = Some(c.beta_hat);
         r.beta_probs = c.beta_probs.clone();
@@ -90,7 +74,7 @@ pub fn record_of(frame: usize, e: &Estimate) -> FrameRecord {
     }
     r.gamma_hat = e.gamma;
     if let Some(s) = &e.status {
-        r.alpha_hat = TrackerStatus::from_index(s.alpha_hat.index());
+        r.alpha_hat = Some(s.alpha_hat);
         r.alpha_probs = s.alpha_probs.to_vec();
     }
     r
@@ -142,9 +126,10 @@ impl Session {
         &mut self,
         frame: &Frame,
         init: &Ellipse,
-        truth: Option<Box2>,
+        truth: Option<BoundingBox>,
     ) -> Result<&FrameRecord> {
-        let (w, h, grey) = (frame.gray.width, frame.gray.height, &frame.gray.data);
+        let (w, h) = (frame.grey.width() as usize, frame.grey.height() as usize);
+        let grey = frame.grey.as_raw();
         let view = match &frame.original {
             Original::Rgb(rgb) => trackers::Frame::with_rgb(w, h, grey, rgb.as_raw()),
             Original::Luma(_) => trackers::Frame::new(w, h, grey),
@@ -153,7 +138,7 @@ impl Session {
         let estimate = if self.started {
             self.tracker.update(view)
         } else {
-            self.tracker.init(view, library_ellipse(init))
+            self.tracker.init(view, *init)
         }
         .map_err(|e| AppError::computation(format!("tracking {}", frame.name), e))?;
         self.started = true;
@@ -171,7 +156,7 @@ impl Session {
         &self,
         frame: &Frame,
         e: &Estimate,
-        truth: Option<Box2>,
+        truth: Option<BoundingBox>,
         draw: DrawOptions,
     ) -> RgbImage {
         let colour = match (draw.colour_by, &e.clutter) {
@@ -180,10 +165,10 @@ impl Session {
         };
         let particles = self.tracker.particles(draw.particles);
         let heaviest = particles.first().map_or(1.0, |p| p.weight).max(1e-300);
-        let mut overlay = Overlay::new(app_ellipse(&e.ellipse), colour);
+        let mut overlay = Overlay::new(e.ellipse, colour);
         overlay.particles = particles
             .iter()
-            .map(|p| (app_ellipse(&p.ellipse), 0.6 * (p.weight / heaviest).sqrt()))
+            .map(|p| (p.ellipse, 0.6 * (p.weight / heaviest).sqrt()))
             .collect();
         overlay.groundtruth = truth;
         render_overlay(&frame.original.to_rgb(), &overlay)

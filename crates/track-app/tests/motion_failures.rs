@@ -117,8 +117,8 @@ fn a_covariance_that_is_not_positive_semi_definite_is_never_reported() {
     let est = motion_est::MotionEstimator::new(motion_est::Settings::default())
         .unwrap()
         .estimate_images(
-            motion_est::ImageView::new(96, 80, &f0).unwrap(),
-            motion_est::ImageView::new(96, 80, &f1).unwrap(),
+            vision_core::GreyImage::new(96, 80, &f0).unwrap(),
+            vision_core::GreyImage::new(96, 80, &f1).unwrap(),
             &motion_est::Region::Full,
             motion_est::ModelSpec::new(motion_est::MotionModel::Affine, false),
             None,

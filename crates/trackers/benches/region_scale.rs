@@ -7,9 +7,9 @@
 use std::hint::black_box;
 use std::path::Path;
 
-use contour_obs::Ellipse;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_main};
 use trackers::{Frame, Preset, build};
+use vision_core::Ellipse;
 
 /// RGB bytes of a `w`×`h` frame: the real frame scaled to that size, or a hash texture.
 fn rgb_frame(w: u32, h: u32) -> (Vec<u8>, &'static str) {
@@ -49,7 +49,7 @@ fn region_scale(c: &mut Criterion) {
             cy: h as f64 / 2.5,
             a: head_w / 2.0,
             b: head_h / 2.0,
-            theta: 0.0,
+            angle: 0.0,
         };
         let Ok(mut tracker) = build(Preset::Head.config(200, 1)) else {
             continue;

@@ -3,10 +3,10 @@
 
 use std::hint::black_box;
 
-use contour_obs::Ellipse;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_main};
 use scene_synth::{Scenario, ScenarioParams, Scene};
 use trackers::{Frame, Preset, build};
+use vision_core::Ellipse;
 
 fn update(c: &mut Criterion) {
     let mut params = ScenarioParams::preset(Scenario::Mclutter);
@@ -29,7 +29,7 @@ fn update(c: &mut Criterion) {
                 cy: e.cy,
                 a: e.a,
                 b: e.b,
-                theta: e.angle,
+                angle: e.angle,
             });
         }
     }

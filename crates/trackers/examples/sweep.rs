@@ -19,9 +19,9 @@
 //! partly hidden going in, hidden, partly hidden coming out, free after; "share of γ̂ MAE" is
 //! the phase's part of the overall γ̂ MAE), to see which phase the errors come from.
 
-use contour_obs::Ellipse;
 use scene_synth::{Scenario, ScenarioParams, Scene};
 use trackers::{Frame, Preset, build};
+use vision_core::{Ellipse, FAILURE_RUN, GreyImage, first_failure};
 fn env(k: &str) -> Option<f64> {
     std::env::var(k).ok().and_then(|v| v.parse().ok())
 }
@@ -231,7 +231,7 @@ fn main() {
                         cy: e.cy,
                         a: e.a,
                         b: e.b,
-                        theta: e.angle,
+                        angle: e.angle,
                     },
                 )
                 .unwrap()
@@ -239,22 +239,13 @@ fn main() {
                 t.update(f).unwrap()
             };
             ms += est.millis;
-            let b = est.bbox;
-            let g = truth.bbox;
-            let ix = (b[0] + b[2]).min(g.x + g.w) - b[0].max(g.x);
-            let iy = (b[1] + b[3]).min(g.y + g.h) - b[1].max(g.y);
-            let inter = ix.max(0.0) * iy.max(0.0);
-            let iou = inter / (b[2] * b[3] + g.w * g.h - inter);
+            let iou = est.bbox.iou(&truth.bbox);
             ious.push(iou);
             if k > 0 {
                 nh += 1.0;
                 let g_err = (est.gamma.unwrap_or(0.0) - (1.0 - truth.visible_fraction)).abs();
                 gerr += g_err;
-                let ta = match truth.status {
-                    scene_synth::Status::Locked => 0,
-                    scene_synth::Status::Partial => 1,
-                    scene_synth::Status::Lost => 2,
-                };
+                let ta = truth.status.index();
                 let a_ok = f64::from(u8::from(
                     est.status.as_ref().map(|s| s.alpha_hat.index()) == Some(ta),
                 ));
@@ -291,7 +282,8 @@ fn main() {
         let mean: f64 = ious.iter().sum::<f64>() / ious.len() as f64;
         let post_mean = post.iter().map(|&k| ious[k]).sum::<f64>() / post.len().max(1) as f64;
         post_total += post_mean;
-        let fail = ious.windows(5).position(|w| w.iter().all(|&v| v < 0.2));
+        // The first frame of the failing run (docs/MODELS.md's rule, `first_failure`).
+        let fail = first_failure(&ious).map(|end| end + 1 - FAILURE_RUN);
         if fail.is_some() {
             fails += 1;
         }
@@ -354,7 +346,7 @@ fn main() {
 /// horizontally and scaled, for a few γ: where the likelihood pulls a partly hidden contour.
 fn landscape(w: usize, h: usize, d: &[f32], truth: &scene_synth::FrameTruth) {
     use contour_obs::{OcclusionLikelihood, Template, WuSettings};
-    let view = contour_obs::GreyView::new(w, h, d).unwrap();
+    let view = GreyImage::new(w, h, d).unwrap();
     let settings = WuSettings {
         window: env("WIN").unwrap_or(8.0),
         ..WuSettings::default()
@@ -369,7 +361,7 @@ fn landscape(w: usize, h: usize, d: &[f32], truth: &scene_synth::FrameTruth) {
                 cy: e.cy,
                 a: e.a * scale,
                 b: e.b * scale,
-                theta: e.angle,
+                angle: e.angle,
             };
             let x = trackers::ShapeSpace::Affine.from_ellipse(&el);
             let pose = trackers::ShapeSpace::Affine.pose(&x);

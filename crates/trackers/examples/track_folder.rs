@@ -12,8 +12,8 @@
 
 use std::path::{Path, PathBuf};
 
-use contour_obs::Ellipse;
 use trackers::{Frame, Preset, build};
+use vision_core::Ellipse;
 
 type Failure = Box<dyn std::error::Error>;
 
@@ -47,7 +47,7 @@ fn main() -> Result<(), Failure> {
         cy: y + h / 2.0,
         a: w / 2.0,
         b: h / 2.0,
-        theta: 0.0,
+        angle: 0.0,
     };
     for (k, path) in paths.iter().enumerate() {
         let rgb = image::open(path)?.to_rgb8();
@@ -62,7 +62,7 @@ fn main() -> Result<(), Failure> {
         } else {
             tracker.update(frame)?
         };
-        let [bx, by, bw, bh] = estimate.bbox;
+        let [bx, by, bw, bh] = estimate.bbox.to_array();
         let status = estimate
             .status
             .map(|s| format!("  P(locked, partial, lost) = {:.2?}", s.alpha_probs))

@@ -340,7 +340,7 @@ impl TrackerDynamics {
                     ..previous.status
                 },
                 _ => StatusState {
-                    alpha: dbn_switch::Status::Locked,
+                    alpha: dbn_switch::TrackStatus::Locked,
                     gamma: 0.0,
                 },
             },
@@ -441,10 +441,10 @@ impl TrackerDynamics {
     /// [`DynamicsSettings::locked_gamma_rate`] (unchanged for the other statuses or κ = 0).
     pub fn locked_gamma(&self, hmm: &StatusHmm, state: StatusState) -> StatusState {
         let kappa = self.settings.locked_gamma_rate;
-        if kappa <= 0.0 || state.alpha != dbn_switch::Status::Locked {
+        if kappa <= 0.0 || state.alpha != dbn_switch::TrackStatus::Locked {
             return state;
         }
-        let r = hmm.range(dbn_switch::Status::Locked);
+        let r = hmm.range(dbn_switch::TrackStatus::Locked);
         let width = r.high - r.low;
         if width <= 0.0 {
             return state;
@@ -489,7 +489,7 @@ impl TrackerDynamics {
                 let kappa = self.settings.locked_gamma_rate;
                 let r = hmm.range(alpha);
                 let width = r.high - r.low;
-                let log_gamma = if alpha == dbn_switch::Status::Locked
+                let log_gamma = if alpha == dbn_switch::TrackStatus::Locked
                     && kappa > 0.0
                     && width > 0.0
                     && r.contains(gamma)
@@ -582,7 +582,7 @@ mod tests {
         let hmm = StatusHmm::new(&dbn_switch::StatusConfig::default()).unwrap();
         let mut d = dynamics(NoiseKind::Gaussian);
         let locked = |gamma| StatusState {
-            alpha: dbn_switch::Status::Locked,
+            alpha: dbn_switch::TrackStatus::Locked,
             gamma,
         };
         // κ = 0: unchanged.
@@ -604,7 +604,7 @@ mod tests {
         let expected = 0.1 - w * (-10.0 * w).exp() / (1.0 - (-10.0 * w).exp());
         assert!((mean - expected).abs() < 1e-3, "{mean} vs {expected}");
         let partial = StatusState {
-            alpha: dbn_switch::Status::PartiallyOccluded,
+            alpha: dbn_switch::TrackStatus::PartiallyOccluded,
             gamma: 0.5,
         };
         assert_eq!(d.locked_gamma(&hmm, partial).gamma, 0.5);

@@ -34,6 +34,9 @@ pub enum Error {
         /// The known names, comma separated.
         known: String,
     },
+    /// An invalid grey image (empty, wrong length, or a non-finite pixel).
+    #[error("image: {0}")]
+    Image(#[from] vision_core::Error),
     /// The particle filter failed (degenerate weights and the like).
     #[error("particle filter: {0}")]
     Smc(#[from] smc_core::Error),

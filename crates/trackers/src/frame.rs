@@ -1,31 +1,38 @@
-//! Frames as the trackers see them: row-major f32 grey levels, borrowed, and optionally the 8-bit
-//! RGB pixels of the same frame (the region tracker's colour model reads them; every other tracker
-//! reads grey). A thin wrapper over `contour_obs::GreyView`, which validates the size and the
-//! pixels once.
+//! Frames as the trackers see them: the workspace's grey image ([`GreyImage`], validated once at
+//! construction) and optionally the 8-bit RGB pixels of the same frame (the region tracker's
+//! colour model reads them; every other tracker reads grey).
 
-use contour_obs::GreyView;
+use vision_core::GreyImage;
 
 use crate::{Error, Result};
 
-/// A borrowed grey frame (row-major, `width`×`height`, grey levels 0–255).
+/// A borrowed frame: a [`GreyImage`] (row-major, `width`×`height`, grey levels 0–255) and, when
+/// the frame has colour, its RGB pixels.
 #[derive(Debug, Clone, Copy)]
 pub struct Frame<'a> {
-    view: GreyView<'a>,
+    grey: GreyImage<'a>,
     rgb: Option<&'a [u8]>,
 }
 
+impl<'a> From<GreyImage<'a>> for Frame<'a> {
+    /// A grey frame.
+    fn from(grey: GreyImage<'a>) -> Self {
+        Self { grey, rgb: None }
+    }
+}
+
 impl<'a> Frame<'a> {
-    /// Wraps `data`.
+    /// Wraps `data` as a grey frame ([`GreyImage::new`]).
     ///
     /// # Errors
     /// [`Error::BadFrame`] when the size is zero, the length does not match, or a pixel is not
     /// finite.
     pub fn new(width: usize, height: usize, data: &'a [f32]) -> Result<Self> {
-        let view = GreyView::new(width, height, data).map_err(|e| Error::BadFrame {
+        let grey = GreyImage::new(width, height, data).map_err(|e| Error::BadFrame {
             frame: 0,
             reason: e.to_string(),
         })?;
-        Ok(Self { view, rgb: None })
+        Ok(grey.into())
     }
 
     /// Wraps `grey` and the same frame's interleaved 8-bit RGB pixels (`3·width·height` bytes,
@@ -48,6 +55,11 @@ impl<'a> Frame<'a> {
         Ok(frame)
     }
 
+    /// The grey image.
+    pub fn grey(&self) -> GreyImage<'a> {
+        self.grey
+    }
+
     /// The RGB pixels, when the frame has colour.
     pub fn rgb(&self) -> Option<&'a [u8]> {
         self.rgb
@@ -55,28 +67,16 @@ impl<'a> Frame<'a> {
 
     /// Width in pixels.
     pub fn width(&self) -> usize {
-        self.view.width()
+        self.grey.width()
     }
 
     /// Height in pixels.
     pub fn height(&self) -> usize {
-        self.view.height()
+        self.grey.height()
     }
 
-    /// The pixels, row-major.
+    /// The grey pixels, row-major.
     pub fn data(&self) -> &'a [f32] {
-        self.view.data()
-    }
-
-    pub(crate) fn grey_view(&self) -> GreyView<'a> {
-        self.view
-    }
-
-    pub(crate) fn image_view(&self) -> Result<motion_est::ImageView<'a>> {
-        Ok(motion_est::ImageView::new(
-            self.width(),
-            self.height(),
-            self.data(),
-        )?)
+        self.grey.data()
     }
 }

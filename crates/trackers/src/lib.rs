@@ -20,8 +20,8 @@
 //!
 //! # Example
 //! ```
+//! use vision_core::Ellipse;
 //! use trackers::{Frame, Preset, build};
-//! use contour_obs::Ellipse;
 //!
 //! // A bright disc of radius 20 on a dark background, moving 2 px right per frame.
 //! let (w, h) = (96, 72);
@@ -36,7 +36,7 @@
 //! };
 //! let mut tracker = build(Preset::M1.config(100, 7))?;
 //! let first = frame_at(0);
-//! let start = Ellipse { cx: 40.0, cy: 36.0, a: 20.0, b: 20.0, theta: 0.0 };
+//! let start = Ellipse { cx: 40.0, cy: 36.0, a: 20.0, b: 20.0, angle: 0.0 };
 //! tracker.init(Frame::new(w, h, &first)?, start)?;
 //! let mut last = None;
 //! for k in 1..6 {

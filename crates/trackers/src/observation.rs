@@ -10,11 +10,12 @@
 //!   fraction of the contour, hidden as one arc ([`LikelihoodSettings::occlusion_arc`]).
 
 use contour_obs::{
-    GreyView, LineTerms, MeasurementLines, OcclusionLikelihood, OdobezLikelihood, OdobezSettings,
-    Template, WuSettings, occlusion_line_log,
+    LineTerms, MeasurementLines, OcclusionLikelihood, OdobezLikelihood, OdobezSettings, Template,
+    WuSettings, occlusion_line_log,
 };
-use motion_est::{ImageView, NccSettings};
+use motion_est::NccSettings;
 use serde::{Deserialize, Serialize};
+use vision_core::GreyImage;
 
 use crate::particle::Particle;
 use crate::proposal::{ClusterMotion, log_motion_consistency};
@@ -403,7 +404,7 @@ impl LikelihoodModel {
     /// A non-finite state.
     pub fn reference_counts(
         &self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         x: &crate::space::StateVector,
         out: &mut ReferenceLines,
     ) -> Result<()> {
@@ -449,9 +450,9 @@ pub struct FrameObservation<'a> {
     /// The terms.
     pub model: &'a LikelihoodModel,
     /// The current frame z_k.
-    pub current: GreyView<'a>,
+    pub current: GreyImage<'a>,
     /// The previous frame z_{k−1} (for p_c2).
-    pub previous: GreyView<'a>,
+    pub previous: GreyImage<'a>,
     /// Cluster motions (for p_c1).
     pub clusters: &'a [ClusterMotion],
     /// The lines at the tracker's last estimate on the current frame (used by
@@ -613,21 +614,7 @@ impl FrameObservation<'_> {
         }
         if let Some((settings, grid)) = &m.implicit {
             let pose_prev = m.space.pose(&p.prev);
-            let views = (
-                ImageView::new(
-                    self.current.width(),
-                    self.current.height(),
-                    self.current.data(),
-                ),
-                ImageView::new(
-                    self.previous.width(),
-                    self.previous.height(),
-                    self.previous.data(),
-                ),
-            );
-            let (Ok(now_view), Ok(prev_view)) = views else {
-                return f64::NEG_INFINITY;
-            };
+            let (now_view, prev_view) = (self.current, self.previous);
             let sampled = motion_est::sample_patch_into(
                 now_view,
                 grid,

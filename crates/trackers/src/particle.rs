@@ -1,7 +1,7 @@
 //! The particle every tracker carries: kinematic state (current and previous, for second-order
 //! dynamics, Odobez's c_k = (α_k, α_{k−1})) and the hidden switching variables of Wu et al.
 
-use dbn_switch::{ClutterState, Status, StatusState};
+use dbn_switch::{ClutterState, StatusState, TrackStatus};
 
 use crate::space::StateVector;
 
@@ -45,7 +45,7 @@ pub const NO_CLUSTER: u32 = u32::MAX;
 /// The hidden variables of a tracker that models neither clutter switching nor occlusion.
 pub fn default_status() -> StatusState {
     StatusState {
-        alpha: Status::Locked,
+        alpha: TrackStatus::Locked,
         gamma: 0.0,
     }
 }

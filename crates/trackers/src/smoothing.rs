@@ -28,7 +28,9 @@
 //! (smoothed ESS of 1–5 on the `occlusion` scene), and the hidden variables are whatever those
 //! few near-ancestral lines happen to carry (docs/RESULTS.md).
 
-use dbn_switch::{ClutterEstimate, MarkovChain, OcclusionState, Status, StatusEstimate, argmax};
+use dbn_switch::{
+    ClutterEstimate, MarkovChain, OcclusionState, StatusEstimate, TrackStatus, argmax,
+};
 use smc_core::{History, TransitionDensity};
 
 use crate::Result;
@@ -153,13 +155,13 @@ pub(crate) fn smooth_hidden(
             statistics.alpha = Some(ChainCounts::of(&smoothed));
             for ((o, s), (mass, gamma)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
                 let mut gamma_hat = 0.0;
-                for (k, status) in Status::ALL.into_iter().enumerate() {
+                for (k, status) in TrackStatus::ALL.into_iter().enumerate() {
                     let r = hmm.range(status);
                     gamma_hat += s[k] * conditional_mean(mass, gamma, k, 0.5 * (r.low + r.high));
                 }
                 o.gamma = Some(gamma_hat);
                 o.status = Some(StatusEstimate {
-                    alpha_hat: Status::from_index(argmax(s)).unwrap_or(Status::Locked),
+                    alpha_hat: TrackStatus::from_index(argmax(s)).unwrap_or(TrackStatus::Locked),
                     alpha_probs: [s[0], s[1], s[2]],
                     gamma_hat,
                 });

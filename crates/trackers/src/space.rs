@@ -4,9 +4,10 @@
 //! - [`ShapeSpace::Odobez`]: α = (Tx, Ty, s, e) (Odobez Eq. 11–12) in the first four slots;
 //! - [`ShapeSpace::Affine`]: Wu's X = (a11, a12, a21, a22, t1, t2) (Wu §6).
 
-use contour_obs::{Affine2, Ellipse};
+use contour_obs::Affine2;
 use nalgebra::Matrix2;
 use serde::{Deserialize, Serialize};
+use vision_core::{BoundingBox, Ellipse};
 
 /// Number of slots of a state vector.
 pub const STATE_SLOTS: usize = 6;
@@ -45,11 +46,11 @@ impl ShapeSpace {
     /// The state of an ellipse. Odobez's space has no rotation: a rotated ellipse is represented
     /// by its axis-aligned bounding ellipse's semi-axes (the half-width and half-height of its box).
     pub fn from_ellipse(self, e: &Ellipse) -> StateVector {
-        let pose = Affine2::from_ellipse(e.cx, e.cy, e.a, e.b, e.theta);
+        let pose = Affine2::from_ellipse(e.cx, e.cy, e.a, e.b, e.angle);
         match self {
             ShapeSpace::Odobez => {
                 let bb = pose.bounding_box();
-                let (sx, sy) = (0.5 * bb.width(), 0.5 * bb.height());
+                let (sx, sy) = (0.5 * bb.w, 0.5 * bb.h);
                 [e.cx, e.cy, 0.5 * (sx + sy), sx / sy, 0.0, 0.0]
             }
             ShapeSpace::Affine => pose.to_wu(),
@@ -199,10 +200,9 @@ pub fn axpy(y: &mut StateVector, a: f64, x: &StateVector) {
     }
 }
 
-/// The axis-aligned box (x, y, w, h) of a pose's contour.
-pub fn pose_box(pose: &Affine2) -> [f64; 4] {
-    let bb = pose.bounding_box();
-    [bb.x_min, bb.y_min, bb.width(), bb.height()]
+/// The axis-aligned box of a pose's contour.
+pub fn pose_box(pose: &Affine2) -> BoundingBox {
+    pose.bounding_box()
 }
 
 #[cfg(test)]
@@ -216,7 +216,7 @@ mod tests {
             cy: 80.0,
             a: 30.0,
             b: 20.0,
-            theta: 0.0,
+            angle: 0.0,
         };
         let x = ShapeSpace::Odobez.from_ellipse(&e);
         assert!((x[2] - 25.0).abs() < 1e-12 && (x[3] - 1.5).abs() < 1e-12);
@@ -232,12 +232,12 @@ mod tests {
             cy: 60.0,
             a: 30.0,
             b: 20.0,
-            theta: 0.3,
+            angle: 0.3,
         };
         let x = ShapeSpace::Affine.from_ellipse(&e);
         let back = ShapeSpace::Affine.pose(&x).to_ellipse().unwrap();
         assert!((back.a - 30.0).abs() < 1e-9 && (back.b - 20.0).abs() < 1e-9);
-        assert!((back.theta - 0.3).abs() < 1e-9);
+        assert!((back.angle - 0.3).abs() < 1e-9);
         assert!((ShapeSpace::Affine.scale(&x) - 600f64.sqrt()).abs() < 1e-9);
     }
 
@@ -256,7 +256,7 @@ mod tests {
             cy: 0.0,
             a: 40.0,
             b: 10.0,
-            theta: 0.4,
+            angle: 0.4,
         };
         let mut x = ShapeSpace::Affine.from_ellipse(&e);
         let bounds = ShapeBounds {
@@ -268,6 +268,6 @@ mod tests {
         let back = ShapeSpace::Affine.pose(&x).to_ellipse().unwrap();
         assert!((back.a / back.b - 2.0).abs() < 1e-9);
         assert!((back.a * back.b - 400.0).abs() < 1e-6);
-        assert!((back.theta - 0.4).abs() < 1e-9);
+        assert!((back.angle - 0.4).abs() < 1e-9);
     }
 }

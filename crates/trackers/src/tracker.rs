@@ -3,7 +3,6 @@
 
 use std::time::Instant;
 
-use contour_obs::Ellipse;
 use dbn_switch::{
     ClutterEstimate, ClutterHmm, ClutterState, OcclusionProcess, StatusEstimate, StatusHmm,
     StatusState,
@@ -12,6 +11,7 @@ use motion_est::{MotionEstimator, Pyramid, Region, Workspace};
 use rand_distr::{Distribution, StandardNormal};
 use smc_core::smooth::{SmootherSettings, smooth_marginals};
 use smc_core::{Bootstrap, ParticleFilter, ParticleSet, StepDiagnostics};
+use vision_core::{BoundingBox, Ellipse, GreyImage};
 
 use crate::cluster::{Clustering, cluster_particles};
 use crate::config::{ClutterMode, OcclusionMode, PoseEstimator, ProposalKind, TrackerConfig};
@@ -33,8 +33,8 @@ pub struct Estimate {
     pub frame: usize,
     /// The estimated contour as an ellipse.
     pub ellipse: Ellipse,
-    /// Its axis-aligned box (x, y, w, h).
-    pub bbox: [f64; 4],
+    /// Its axis-aligned box.
+    pub bbox: BoundingBox,
     /// The estimated shape-space state.
     pub state: StateVector,
     /// Effective sample size after weighting (N at the initialisation frame).
@@ -120,7 +120,7 @@ pub trait Tracker: Send {
 /// # Errors
 /// [`Error::InvalidSetting`] naming the ellipse.
 pub(crate) fn check_initial(ellipse: &Ellipse) -> Result<()> {
-    let values = [ellipse.cx, ellipse.cy, ellipse.a, ellipse.b, ellipse.theta];
+    let values = [ellipse.cx, ellipse.cy, ellipse.a, ellipse.b, ellipse.angle];
     if values.iter().any(|v| !v.is_finite()) || !(ellipse.a > 0.0 && ellipse.b > 0.0) {
         return Err(Error::InvalidSetting {
             name: "initial ellipse",
@@ -257,7 +257,7 @@ impl ParticleTracker {
         let space = self.config.space;
         std::mem::swap(&mut self.pyramid_prev, &mut self.pyramid_now);
         self.motion
-            .build_pyramid_into(frame.image_view()?, &mut self.pyramid_now)?;
+            .build_pyramid_into(frame.grey(), &mut self.pyramid_now)?;
         let k = self.config.motion.cluster_count(set.len());
         cluster_particles(
             space,
@@ -291,12 +291,12 @@ impl ParticleTracker {
             let pose = space.pose(mean);
             let sigmas = self.dynamics.settings.sigmas(space, mean);
             let motion = pose.to_ellipse().and_then(|e| {
-                let region = Region::Ellipse(motion_est::Ellipse {
+                let region = Region::Ellipse(vision_core::Ellipse {
                     cx: e.cx,
                     cy: e.cy,
                     a: e.a,
                     b: e.b,
-                    theta: e.theta,
+                    angle: e.angle,
                 });
                 let est = self
                     .motion
@@ -473,7 +473,7 @@ impl ParticleTracker {
         self.memory
             .shape_agrees(self.config.space, state, settings.shape_tolerance)
             && gamma.is_none_or(|g| g < settings.lock_gamma)
-            && status.is_none_or(|s| s.alpha_hat == dbn_switch::Status::Locked)
+            && status.is_none_or(|s| s.alpha_hat == dbn_switch::TrackStatus::Locked)
     }
 
     fn check_frame(&self, frame: &Frame<'_>) -> Result<()> {
@@ -550,7 +550,7 @@ impl Tracker for ParticleTracker {
         self.dynamics.reacquisition = None;
         if self.config.needs_motion() {
             self.motion
-                .build_pyramid_into(frame.image_view()?, &mut self.pyramid_now)?;
+                .build_pyramid_into(frame.grey(), &mut self.pyramid_now)?;
         }
         self.report(centre, start.elapsed().as_secs_f64() * 1e3)
     }
@@ -583,8 +583,8 @@ impl Tracker for ParticleTracker {
         // estimates (see `DynamicsSettings::shape_reversion`).
         self.dynamics.shape_anchor =
             (self.config.dynamics.shape_reversion > 0.0).then(|| *self.memory.state());
-        let current = frame.grey_view();
-        let previous = contour_obs::GreyView::new(self.size.0, self.size.1, &self.previous)?;
+        let current = frame.grey();
+        let previous = GreyImage::new(self.size.0, self.size.1, &self.previous)?;
         self.likelihood
             .reference_counts(&current, &self.last_state, &mut self.reference)?;
         let observation = FrameObservation {

@@ -21,8 +21,8 @@
 //! target is seen, and P(unseen) is added to "lost". The check only reports: the filter, its
 //! hidden processes and the reacquisition memory are the papers' as before.
 
-use contour_obs::Ellipse;
-use dbn_switch::{Status, StatusEstimate};
+use dbn_switch::{StatusEstimate, TrackStatus};
+use vision_core::Ellipse;
 
 use crate::region::status::LostChain;
 
@@ -74,11 +74,11 @@ impl Visibility {
 pub fn fuse(status: &StatusEstimate, unseen: f64) -> StatusEstimate {
     let seen = 1.0 - unseen;
     let mut probs = status.alpha_probs.map(|p| p * seen);
-    probs[Status::Lost.index()] += unseen;
+    probs[TrackStatus::Lost.index()] += unseen;
     let best = (0..probs.len())
         .max_by(|&a, &b| probs[a].total_cmp(&probs[b]))
-        .and_then(Status::from_index)
-        .unwrap_or(Status::Lost);
+        .and_then(TrackStatus::from_index)
+        .unwrap_or(TrackStatus::Lost);
     StatusEstimate {
         alpha_hat: best,
         alpha_probs: probs,
@@ -93,7 +93,7 @@ const CONTOUR_POINTS: usize = 48;
 /// pixel either side of the contour along its normal) at [`CONTOUR_POINTS`] points, and how
 /// many of them fell inside the frame.
 fn contour_contrast(grey: &[f32], (w, h): (usize, usize), e: &Ellipse) -> (f64, usize) {
-    let (c, s) = (e.theta.cos(), e.theta.sin());
+    let (c, s) = (e.angle.cos(), e.angle.sin());
     let at = |x: f64, y: f64| -> Option<f64> {
         let (i, j) = (x.round(), y.round());
         (i >= 0.0 && j >= 0.0 && (i as usize) < w && (j as usize) < h)
@@ -158,14 +158,14 @@ mod tests {
     #[test]
     fn fusing_moves_the_unseen_mass_to_lost() {
         let status = StatusEstimate {
-            alpha_hat: Status::Locked,
+            alpha_hat: TrackStatus::Locked,
             alpha_probs: [0.9, 0.08, 0.02],
             gamma_hat: 0.05,
         };
         let same = fuse(&status, 0.0);
         assert_eq!(same, status);
         let fused = fuse(&status, 0.8);
-        assert_eq!(fused.alpha_hat, Status::Lost);
+        assert_eq!(fused.alpha_hat, TrackStatus::Lost);
         assert!((fused.alpha_probs.iter().sum::<f64>() - 1.0).abs() < 1e-12);
         assert!((fused.alpha_probs[0] - 0.18).abs() < 1e-12);
     }

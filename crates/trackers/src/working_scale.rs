@@ -14,8 +14,8 @@
 //! which is what a camera with larger pixels would have recorded: the noise falls by f and fine
 //! texture averages out, while an outline of the target's size is kept.
 
-use contour_obs::Ellipse;
 use smc_core::smooth::SmootherSettings;
+use vision_core::{BoundingBox, Ellipse};
 
 use crate::config::TrackerConfig;
 use crate::frame::Frame;
@@ -74,7 +74,7 @@ impl WorkingScale {
             cy: self.point_to_working(e.cy),
             a: e.a / self.factor,
             b: e.b / self.factor,
-            theta: e.theta,
+            angle: e.angle,
         }
     }
 
@@ -85,7 +85,7 @@ impl WorkingScale {
             cy: self.point_to_frame(e.cy),
             a: e.a * self.factor,
             b: e.b * self.factor,
-            theta: e.theta,
+            angle: e.angle,
         }
     }
 
@@ -93,13 +93,13 @@ impl WorkingScale {
     /// edges per working pixel: it is measured on the working frame.
     pub fn estimate_to_frame(&self, space: ShapeSpace, mut e: Estimate) -> Estimate {
         e.ellipse = self.to_frame(&e.ellipse);
-        let [x, y, w, h] = e.bbox;
-        e.bbox = [
-            self.point_to_frame(x),
-            self.point_to_frame(y),
-            w * self.factor,
-            h * self.factor,
-        ];
+        let b = e.bbox;
+        e.bbox = BoundingBox::new(
+            self.point_to_frame(b.x),
+            self.point_to_frame(b.y),
+            b.w * self.factor,
+            b.h * self.factor,
+        );
         e.state = space.map_pose(&e.state, self.factor, self.factor * 0.5 - 0.5);
         e
     }
@@ -316,7 +316,7 @@ mod tests {
                 cy: 40.0,
                 a: 40.0,
                 b: 40.0,
-                theta: 0.0,
+                angle: 0.0,
             },
             10.0,
         );
@@ -340,7 +340,7 @@ mod tests {
             cy: 12.9,
             a: 20.0,
             b: 8.0,
-            theta: 0.4,
+            angle: 0.4,
         };
         let back = scale.to_frame(&scale.to_working(&e));
         assert!((back.cx - e.cx).abs() < 1e-12 && (back.b - e.b).abs() < 1e-12);
@@ -370,7 +370,7 @@ mod tests {
                 cy: 150.0,
                 a: 75.0,
                 b: 75.0,
-                theta: 0.0,
+                angle: 0.0,
             };
             let first = tracker
                 .init(Frame::new(w, h, &frame_at(0)).unwrap(), start)
@@ -391,7 +391,7 @@ mod tests {
                 "{seed}: {e:?}"
             );
             assert!((e.a / 75.0 - 1.0).abs() < 0.15, "{seed}: {e:?}");
-            let [x, _, bw, _] = last.bbox;
+            let (x, bw) = (last.bbox.x, last.bbox.w);
             assert!((x + 0.5 * bw - e.cx).abs() < 1e-6);
             let p = tracker.particles(1);
             assert!((p[0].ellipse.cx - 198.0).abs() < 10.0);

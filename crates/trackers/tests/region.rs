@@ -2,8 +2,8 @@
 //! follows a textured face-coloured ellipse across a textured background, keeps its size, knows
 //! when the target has gone and finds it again, whatever the seed.
 
-use contour_obs::Ellipse;
 use trackers::{Frame, Preset, build};
+use vision_core::Ellipse;
 
 const W: usize = 320;
 const H: usize = 240;
@@ -44,15 +44,6 @@ fn render(target: Option<Ellipse>) -> (Vec<f32>, Vec<u8>) {
     (grey, rgb)
 }
 
-fn iou(a: [f64; 4], b: [f64; 4]) -> f64 {
-    let x0 = a[0].max(b[0]);
-    let y0 = a[1].max(b[1]);
-    let x1 = (a[0] + a[2]).min(b[0] + b[2]);
-    let y1 = (a[1] + a[3]).min(b[1] + b[3]);
-    let i = (x1 - x0).max(0.0) * (y1 - y0).max(0.0);
-    i / (a[2] * a[3] + b[2] * b[3] - i)
-}
-
 /// The target's path: a sweep to the right and back with a fast stretch, and hidden (`None`)
 /// on frames `hidden`.
 fn target_at(k: usize, hidden: &std::ops::Range<usize>) -> Option<Ellipse> {
@@ -67,7 +58,7 @@ fn target_at(k: usize, hidden: &std::ops::Range<usize>) -> Option<Ellipse> {
         cy,
         a: 22.0,
         b: 28.0,
-        theta: 0.0,
+        angle: 0.0,
     })
 }
 
@@ -96,8 +87,7 @@ fn track(seed: u64, frames: usize, hidden: std::ops::Range<usize>) -> Run {
         let p_lost = e.status.unwrap().alpha_probs[2];
         match truth {
             Some(t) => {
-                let box_t = [t.cx - t.a, t.cy - t.b, 2.0 * t.a, 2.0 * t.b];
-                let o = iou(e.bbox, box_t);
+                let o = e.bbox.iou(&t.bounding_box());
                 if k < hidden.start {
                     ious.push(o);
                     visible.push(p_lost);
@@ -166,7 +156,7 @@ fn grey_frames_work_too() {
         let t = target_at(k, &(0..0)).unwrap();
         let (g, _) = render(Some(t));
         let e = tracker.update(Frame::new(W, H, &g).unwrap()).unwrap();
-        ious.push(iou(e.bbox, [t.cx - t.a, t.cy - t.b, 2.0 * t.a, 2.0 * t.b]));
+        ious.push(e.bbox.iou(&t.bounding_box()));
     }
     let mean = ious.iter().sum::<f64>() / ious.len() as f64;
     assert!(mean > 0.6, "mean IoU {mean:.3}");
@@ -196,7 +186,7 @@ fn same_seed_same_output_and_bad_input_is_an_error() {
         cy: 0.0,
         a: 1.0,
         b: 1.0,
-        theta: 0.0,
+        angle: 0.0,
     };
     assert!(
         tracker
@@ -240,7 +230,7 @@ fn a_tight_annotation_keeps_its_convention() {
             let e = tracker
                 .update(Frame::with_rgb(W, H, &g, &c).unwrap())
                 .unwrap();
-            let reported = (e.bbox[2] * e.bbox[3]).sqrt();
+            let reported = (e.bbox.w * e.bbox.h).sqrt();
             let expected = 2.0 * (annotation.a * annotation.b).sqrt();
             log_sizes.push((reported / expected).ln());
         }

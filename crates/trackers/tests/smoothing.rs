@@ -1,8 +1,8 @@
 //! Smoothing a recorded run (`Tracker::smoothed`, issue 19): the smoothed estimates cover every
 //! updated frame, the last one is the filter's own, and a tracker that records nothing says so.
 
-use contour_obs::Ellipse;
 use trackers::{Frame, Preset, SmootherSettings, TrackerConfig, build};
+use vision_core::Ellipse;
 
 /// A bright disc of radius 22 on a textured background, moving 2 px right per frame.
 fn frame_at(k: usize) -> (usize, usize, Vec<f32>) {
@@ -31,7 +31,7 @@ fn the_smoothed_run_covers_every_frame_and_ends_where_the_filter_ends() {
         cy: 45.0,
         a: 22.0,
         b: 22.0,
-        theta: 0.0,
+        angle: 0.0,
     };
     for preset in [Preset::M1, Preset::WHmm, Preset::WEval, Preset::Full] {
         for seed in 1..=2 {
@@ -98,7 +98,7 @@ fn a_tracker_that_records_nothing_cannot_be_smoothed() {
         cy: 45.0,
         a: 22.0,
         b: 22.0,
-        theta: 0.0,
+        angle: 0.0,
     };
     tracker
         .init(Frame::new(w, h, &first).unwrap(), start)

@@ -2,7 +2,7 @@
 //! every pixel by bilinear interpolation, with their detected edges. [`MeasurementLines`] is the
 //! reusable workspace of every likelihood: after the first use it allocates nothing.
 //!
-//! Sample positions c + k·n are stepped in fixed point (`GreyView::sample_line`): within
+//! Sample positions c + k·n are stepped in fixed point (`image::sample_line`): within
 //! ~1e−6 px of the exact positions, so edge offsets agree with per-sample f32 interpolation to
 //! within 1e−4 px (asserted by `tests/fast_paths.rs`).
 //!
@@ -21,9 +21,11 @@ mod scan_plan;
 
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
+use vision_core::GreyImage;
 
+use crate::image::check_samplable;
 use crate::scan::LineScan;
-use crate::{Affine2, Contour, EdgeDetector, EdgeSettings, Error, GreyView, Result};
+use crate::{Affine2, Contour, EdgeDetector, EdgeSettings, Error, Result};
 use scan_plan::Planned;
 
 /// Most measurement lines a contour may have (a contour is sampled, not rasterised: more lines
@@ -199,13 +201,15 @@ impl MeasurementLines {
     ///
     /// # Errors
     /// [`Error::NonFinite`] (index 0) when the pose is not finite;
-    /// [`Error::LengthMismatch`] when the contour does not have `n_lines` points.
+    /// [`Error::LengthMismatch`] when the contour does not have `n_lines` points;
+    /// [`Error::ImageTooSmall`] for an image below 2×2 pixels.
     pub fn extract(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         contour: &Contour,
         pose: &Affine2,
     ) -> Result<()> {
+        check_samplable(image)?;
         if !pose.is_finite() {
             return Err(Error::NonFinite {
                 what: "pose",
@@ -237,7 +241,7 @@ impl MeasurementLines {
     /// unobserved line). Used directly by clutter learning.
     pub fn push_line(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         centre: Vector2<f64>,
         normal: Option<Vector2<f64>>,
     ) {
@@ -340,7 +344,7 @@ mod tests {
         let data: Vec<f32> = (0..w * h)
             .map(|k| 200.0 * ((k % w) as f32 + 0.5 - 20.3).clamp(0.0, 1.0))
             .collect();
-        let img = GreyView::new(w, h, &data).unwrap();
+        let img = GreyImage::new(w, h, &data).unwrap();
         let mut ml = MeasurementLines::new(&LineSettings::default()).unwrap();
         ml.push_line(&img, Vector2::new(18.0, 5.0), Some(Vector2::new(1.0, 0.0)));
         ml.push_line(&img, Vector2::new(18.0, 5.0), Some(Vector2::new(-1.0, 0.0)));
@@ -357,7 +361,7 @@ mod tests {
     #[test]
     fn lines_outside_are_unobserved_with_full_length() {
         let data = vec![0.0f32; 100];
-        let img = GreyView::new(10, 10, &data).unwrap();
+        let img = GreyImage::new(10, 10, &data).unwrap();
         let mut ml = MeasurementLines::new(&LineSettings::default()).unwrap();
         ml.push_line(&img, Vector2::new(-50.0, 5.0), Some(Vector2::new(0.0, 1.0)));
         ml.push_line(&img, Vector2::new(5.0, 5.0), None);
@@ -380,7 +384,7 @@ mod tests {
         // examined, below half, so the line is unobserved; centred at x = 8 it sees 4 … 10 of 21
         // with the left limit at −8 + 4 = −4: offsets −4 … 10, 15 of 21.
         let data = vec![0.0f32; 900];
-        let img = GreyView::new(30, 30, &data).unwrap();
+        let img = GreyImage::new(30, 30, &data).unwrap();
         let mut ml = MeasurementLines::new(&LineSettings::default()).unwrap();
         ml.push_line(&img, Vector2::new(2.0, 15.0), Some(Vector2::new(1.0, 0.0)));
         ml.push_line(&img, Vector2::new(8.0, 15.0), Some(Vector2::new(1.0, 0.0)));

@@ -3,10 +3,10 @@
 //! likelihood).
 
 use nalgebra::Vector2;
+use vision_core::GreyImage;
 
 use super::MeasurementLines;
 use super::scan_plan::{Planned, inside_interval};
-use crate::GreyView;
 
 impl MeasurementLines {
     /// Line `i` of the last [`Self::scan_lines`] (candidates −L/2 ..= L/2) without storing it:
@@ -18,7 +18,7 @@ impl MeasurementLines {
     #[cfg(test)]
     pub(crate) fn count_edges(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         i: usize,
         near: f64,
     ) -> (f64, usize) {
@@ -55,7 +55,7 @@ impl MeasurementLines {
     #[inline]
     pub(crate) fn count_edges_in(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         i: usize,
         window: u64,
     ) -> (f64, usize) {
@@ -95,7 +95,7 @@ impl MeasurementLines {
     /// stored in the line list.
     pub fn nearest_edge_sq(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         centre: Vector2<f64>,
         normal: Option<Vector2<f64>>,
         search: usize,
@@ -110,7 +110,7 @@ impl MeasurementLines {
     /// [`Self::nearest_edge_sq`] of line `i` of the last [`Self::scan_lines`], which must have
     /// scanned the candidates −`search` ..= `search` (`search` ≤ L/2).
     #[inline]
-    pub(crate) fn nearest_planned(&mut self, image: &GreyView<'_>, i: usize, search: i64) -> f64 {
+    pub(crate) fn nearest_planned(&mut self, image: &GreyImage<'_>, i: usize, search: i64) -> f64 {
         match self.plan.get(i) {
             Some(&Planned {
                 fast: Some(line), ..
@@ -136,7 +136,7 @@ impl MeasurementLines {
     /// [`Self::nearest_edge_sq`] on the general path (`search` ≤ L/2).
     pub(super) fn nearest_general(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         centre: Vector2<f64>,
         normal: Option<Vector2<f64>>,
         search: i64,
@@ -167,7 +167,8 @@ impl MeasurementLines {
         // clo − 1 ..= chi + 1, in one run.
         let (s_lo, s_hi) = (clo - 1 - r, chi + 1 + r);
         self.samples.resize((s_hi - s_lo + 1) as usize, 0.0);
-        image.sample_line(
+        crate::image::sample_line(
+            image,
             (centre.x, centre.y),
             (n.x, n.y),
             s_lo,

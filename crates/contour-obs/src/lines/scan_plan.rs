@@ -4,9 +4,11 @@
 //! edges.
 
 use nalgebra::Vector2;
+use vision_core::GreyImage;
 
 use super::MeasurementLines;
-use crate::{Affine2, Contour, GreyView};
+use crate::image::samplable;
+use crate::{Affine2, Contour};
 
 /// Whether a line lies wholly inside the image: both end points c ± reach·n in
 /// [0, w − 1] × [0, h − 1], the test `inside_interval` starts with (so that the fast and the
@@ -40,7 +42,7 @@ impl LineBounds {
 /// per instruction set and runs under the best one of the processor.
 struct ScanLines<'a, 'b> {
     lines: &'a mut MeasurementLines,
-    image: &'a GreyView<'b>,
+    image: &'a GreyImage<'b>,
     contour: &'a Contour,
     pose: &'a Affine2,
     klo: i64,
@@ -79,7 +81,7 @@ impl MeasurementLines {
     /// Each line's plan is then in `plan`. The pose must be finite.
     pub(crate) fn scan_lines(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         contour: &Contour,
         pose: &Affine2,
         klo: i64,
@@ -100,7 +102,7 @@ impl MeasurementLines {
     #[inline(always)]
     fn scan_lines_with(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         contour: &Contour,
         pose: &Affine2,
         klo: i64,
@@ -129,7 +131,7 @@ impl MeasurementLines {
     /// One line through the fast scan alone: its index there, or `None` for the general path.
     pub(super) fn scan_one(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         centre: Vector2<f64>,
         normal: Option<Vector2<f64>>,
         klo: i64,
@@ -151,11 +153,19 @@ impl MeasurementLines {
 
     /// The end-point test of lines on `image`.
     #[inline]
-    fn bounds(&self, image: &GreyView<'_>) -> LineBounds {
+    fn bounds(&self, image: &GreyImage<'_>) -> LineBounds {
+        // An image without an interpolation cell holds no line (every end point fails).
+        let side = |n: usize| {
+            if samplable(image) {
+                (n - 1) as f64
+            } else {
+                -1.0
+            }
+        };
         LineBounds {
             reach: self.reach as f64,
-            xmax: (image.width() - 1) as f64,
-            ymax: (image.height() - 1) as f64,
+            xmax: side(image.width()),
+            ymax: side(image.height()),
         }
     }
 
@@ -175,7 +185,7 @@ impl MeasurementLines {
     /// and returns how many offsets were examined (0: unobserved).
     pub(super) fn append_general(
         &mut self,
-        image: &GreyView<'_>,
+        image: &GreyImage<'_>,
         centre: Vector2<f64>,
         normal: Option<Vector2<f64>>,
     ) -> usize {
@@ -188,7 +198,14 @@ impl MeasurementLines {
         let half = self.settings.half_length() as i64;
         let len = (hi - lo + 1) as usize;
         self.samples.resize(len, 0.0);
-        image.sample_line((centre.x, centre.y), (n.x, n.y), lo, hi, &mut self.samples);
+        crate::image::sample_line(
+            image,
+            (centre.x, centre.y),
+            (n.x, n.y),
+            lo,
+            hi,
+            &mut self.samples,
+        );
         let before = self.edges.len();
         let examined = self
             .detector
@@ -205,11 +222,14 @@ impl MeasurementLines {
 /// The integer offsets k in [−reach, reach] for which centre + k·n lies inside the image, or
 /// `None` if there are none. A segment meets a rectangle in one interval, so this is exact.
 pub(super) fn inside_interval(
-    image: &GreyView<'_>,
+    image: &GreyImage<'_>,
     c: Vector2<f64>,
     n: Vector2<f64>,
     reach: i64,
 ) -> Option<(i64, i64)> {
+    if !samplable(image) {
+        return None;
+    }
     let r = reach as f64;
     let (xmax, ymax) = ((image.width() - 1) as f64, (image.height() - 1) as f64);
     // Most lines lie wholly inside: both end points inside means the whole segment is.
@@ -311,7 +331,7 @@ mod tests {
         let mut rng = Pcg64Mcg::seed_from_u64(21);
         let (w, h) = (150, 110);
         let data = cluttered(&mut rng, w, h);
-        let image = GreyView::new(w, h, &data).unwrap();
+        let image = GreyImage::new(w, h, &data).unwrap();
         let (mut fast_lines, mut edges) = (0usize, 0usize);
         for settings in settings_under_test() {
             let settings = LineSettings {
@@ -401,7 +421,7 @@ mod tests {
         let mut rng = Pcg64Mcg::seed_from_u64(22);
         let (w, h) = (150, 110);
         let data = cluttered(&mut rng, w, h);
-        let image = GreyView::new(w, h, &data).unwrap();
+        let image = GreyImage::new(w, h, &data).unwrap();
         let sets = instruction_sets();
         let mut lines = 0usize;
         for settings in settings_under_test() {

@@ -1,7 +1,8 @@
 //! The synthetic 320×240 pair shared by the benchmark (`benches/motion.rs`) and the profiling
 //! driver (`examples/motion_profile.rs`), included in both with `#[path]`.
 
-use motion_est::{Ellipse, Region};
+use motion_est::Region;
+use vision_core::Ellipse;
 
 pub const W: usize = 320;
 pub const H: usize = 240;
@@ -17,7 +18,7 @@ pub fn tracking_ellipse() -> Region<'static> {
         cy: TRACK_CENTRE[1],
         a: 22.0,
         b: 28.0,
-        theta: 0.0,
+        angle: 0.0,
     })
 }
 

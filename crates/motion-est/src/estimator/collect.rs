@@ -20,7 +20,7 @@ impl<'r, 'a> RowTest<'r, 'a> {
     pub(super) fn new(region: &'r Region<'a>) -> Self {
         let (mut sc, mut quad) = ((0.0, 1.0), [0.0; 3]);
         if let Region::Ellipse(e) = region {
-            let (s, c) = e.theta.sin_cos();
+            let (s, c) = e.angle.sin_cos();
             let (ia, ib) = (1.0 / (e.a * e.a), 1.0 / (e.b * e.b));
             sc = (s, c);
             quad = [

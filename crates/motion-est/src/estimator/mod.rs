@@ -46,8 +46,8 @@ mod warp;
 mod workspace;
 
 use nalgebra::{SMatrix, SVector};
+use vision_core::GreyImage;
 
-use crate::image::ImageView;
 use crate::model::ModelSpec;
 use crate::pyramid::{Pyramid, Window};
 use crate::region::Region;
@@ -95,7 +95,7 @@ impl MotionEstimator {
     ///
     /// # Errors
     /// As [`Pyramid::build_into`].
-    pub fn build_pyramid_into(&self, image: ImageView<'_>, pyramid: &mut Pyramid) -> Result<()> {
+    pub fn build_pyramid_into(&self, image: GreyImage<'_>, pyramid: &mut Pyramid) -> Result<()> {
         pyramid.build_into(image, None, self.settings.levels, self.settings.presmooth)
     }
 
@@ -107,8 +107,8 @@ impl MotionEstimator {
     /// As [`estimate`](Self::estimate), plus image errors.
     pub fn estimate_images_into(
         &self,
-        image0: ImageView<'_>,
-        image1: ImageView<'_>,
+        image0: GreyImage<'_>,
+        image1: GreyImage<'_>,
         region: &Region<'_>,
         spec: ModelSpec,
         origin: Option<[f64; 2]>,
@@ -140,7 +140,7 @@ impl MotionEstimator {
     /// The rest of [`estimate_images_into`](Self::estimate_images_into) once the window is known.
     fn estimate_window(
         &self,
-        images: [ImageView<'_>; 2],
+        images: [GreyImage<'_>; 2],
         request: &Request<'_>,
         buffers: &mut FrameBuffers,
         win: Window,
@@ -175,8 +175,8 @@ impl MotionEstimator {
     /// As [`estimate_images_into`](Self::estimate_images_into).
     pub fn estimate_images(
         &self,
-        image0: ImageView<'_>,
-        image1: ImageView<'_>,
+        image0: GreyImage<'_>,
+        image1: GreyImage<'_>,
         region: &Region<'_>,
         spec: ModelSpec,
         origin: Option<[f64; 2]>,
@@ -258,17 +258,17 @@ impl MotionEstimator {
     /// # Examples
     /// ```
     /// use motion_est::{
-    ///     ImageView, ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Request, Settings,
-    ///     Workspace,
+    ///     ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Request, Settings, Workspace,
     /// };
+    /// use vision_core::GreyImage;
     /// let (w, h) = (96, 80);
     /// let tex = |x: f64, y: f64| 128.0 + 40.0 * (0.31 * x + 0.1 * y).sin() + 30.0 * (0.23 * y - 0.05 * x).cos();
     /// let f0: Vec<f32> = (0..w * h).map(|k| tex((k % w) as f64, (k / w) as f64) as f32).collect();
     /// let f1: Vec<f32> = (0..w * h).map(|k| tex((k % w) as f64 - 1.5, (k / w) as f64) as f32).collect();
     /// let est = MotionEstimator::new(Settings::default())?;
     /// let (mut p0, mut p1) = (Pyramid::new(), Pyramid::new());
-    /// est.build_pyramid_into(ImageView::new(w, h, &f0)?, &mut p0)?;
-    /// est.build_pyramid_into(ImageView::new(w, h, &f1)?, &mut p1)?;
+    /// est.build_pyramid_into(GreyImage::new(w, h, &f0)?, &mut p0)?;
+    /// est.build_pyramid_into(GreyImage::new(w, h, &f1)?, &mut p1)?;
     /// let region = Region::Full;
     /// // Warm-started from a guess 0.4 px off.
     /// let guess = [1.1, 0.2];

@@ -1,8 +1,10 @@
 //! Unit tests of the estimator on noise-free synthetic pairs.
 
+use vision_core::Ellipse;
+
 use super::*;
 use crate::model::MotionModel;
-use crate::region::{Ellipse, MaskView};
+use crate::region::MaskView;
 use crate::robust::RobustFunction;
 
 const W: usize = 128;
@@ -37,10 +39,10 @@ fn pair(a: [f64; 6], origin: [f64; 2], offset: f64) -> (Vec<f32>, Vec<f32>) {
     (f0, f1)
 }
 
-fn views<'a>(f0: &'a [f32], f1: &'a [f32]) -> (ImageView<'a>, ImageView<'a>) {
+fn views<'a>(f0: &'a [f32], f1: &'a [f32]) -> (GreyImage<'a>, GreyImage<'a>) {
     (
-        ImageView::new(W, H, f0).unwrap(),
-        ImageView::new(W, H, f1).unwrap(),
+        GreyImage::new(W, H, f0).unwrap(),
+        GreyImage::new(W, H, f1).unwrap(),
     )
 }
 
@@ -54,7 +56,7 @@ fn shared_ellipse() -> Ellipse {
         cy: 50.0,
         a: 30.0,
         b: 20.0,
-        theta: 0.4,
+        angle: 0.4,
     }
 }
 
@@ -206,7 +208,7 @@ fn non_convergence_is_a_status_not_an_error() {
 #[test]
 fn flat_images_and_bad_inputs_are_errors() {
     let flat = vec![100.0f32; W * H];
-    let v = ImageView::new(W, H, &flat).unwrap();
+    let v = GreyImage::new(W, H, &flat).unwrap();
     let est = MotionEstimator::new(Settings::default()).unwrap();
     let r = est.estimate_images(
         v,
@@ -218,7 +220,7 @@ fn flat_images_and_bad_inputs_are_errors() {
     assert!(matches!(r, Err(Error::Degenerate { .. })), "{r:?}");
 
     let small = vec![0.0f32; 16];
-    let s = ImageView::new(4, 4, &small).unwrap();
+    let s = GreyImage::new(4, 4, &small).unwrap();
     let r = est.estimate_images(
         v,
         s,

@@ -7,17 +7,19 @@
 use image::GrayImage;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
+use vision_core::Ellipse;
 
 mod layers;
 
 use layers::{Appearance, Occluder, Stream, mix};
 
 use crate::background::Background;
+use crate::edges::bilinear_raw;
 use crate::error::{Error, Result};
-use crate::geometry::Ellipse;
+use crate::geometry::{OdobezState, WuAffine};
 use crate::params::{Scenario, ScenarioParams};
 use crate::trajectory::{FrameState, plan};
-use crate::truth::{FrameTruth, Status};
+use crate::truth::FrameTruth;
 
 /// A deterministic synthetic sequence: build once, render any frame in any order.
 #[derive(Debug, Clone)]
@@ -172,13 +174,13 @@ impl Scene {
         FrameTruth {
             frame: k,
             ellipse: e,
-            odobez: e.odobez(),
-            affine: e.affine(),
+            odobez: OdobezState::from_ellipse(&e),
+            affine: WuAffine::from_ellipse(&e),
             bbox: e.bounding_box(),
             clutter_class: class,
             edge_density: density / cam.zoom,
             visible_fraction: v,
-            status: Status::from_visible(v, &self.params.status),
+            status: self.params.status.status(v),
             distractor: st.distractor,
         }
     }
@@ -258,12 +260,11 @@ impl Scene {
         }
         let (fcx, fcy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
         let inv = 1.0 / cam.zoom;
-        let view = bg.view();
         for y in 0..h {
             let qy = cam.cy + (y as f64 - fcy) * inv;
             for x in 0..w {
                 let qx = cam.cx + (x as f64 - fcx) * inv;
-                buf[y * w + x] = view.bilinear(qx, qy) as f32;
+                buf[y * w + x] = bilinear_raw(bg.width, bg.height, &bg.data, qx, qy) as f32;
             }
         }
     }

@@ -2,10 +2,13 @@
 
 use std::f64::consts::PI;
 
+use vision_core::{GreyImage, TrackStatus};
+
 use super::*;
 use crate::edges::{
-    EdgeDetector, EdgeScratch, GrayView, Segment, count_edges, edge_density, random_segments,
+    EdgeDetector, EdgeScratch, Segment, bilinear, count_edges, edge_density, random_segments,
 };
+use crate::geometry::point_and_normal;
 
 fn scene(sc: Scenario, frames: usize, seed: u64) -> Scene {
     let mut p = ScenarioParams::preset(sc);
@@ -30,11 +33,7 @@ fn measured_clutter_densities_match_the_requested_ones_within_15_percent() {
         for k in [0usize, 20, 40, 60, 80, 100] {
             let (img, truth) = sc.render_frame(k).unwrap();
             let data = to_f32(&img);
-            let view = GrayView {
-                width: w,
-                height: h,
-                data: &data,
-            };
+            let view = GreyImage::new(w, h, &data).unwrap();
             let e = truth.ellipse;
             let clear = |s: &Segment| {
                 let len = s.length();
@@ -100,27 +99,19 @@ fn ground_truth_ellipse_lies_within_half_a_pixel_of_the_strongest_edge() {
             let st = s.states[k];
             let (img, truth) = s.render_frame(k).unwrap();
             let data = to_f32(&img);
-            let frame = GrayView {
-                width: w,
-                height: h,
-                data: &data,
-            };
+            let frame = GreyImage::new(w, h, &data).unwrap();
             s.paint_background(&st, &mut bgbuf);
-            let bg = GrayView {
-                width: w,
-                height: h,
-                data: &bgbuf,
-            };
+            let bg = GreyImage::new(w, h, &bgbuf).unwrap();
             let e = truth.ellipse;
             for i in 0..72 {
                 let phi = i as f64 * 2.0 * PI / 72.0;
-                let (p, n) = e.point_and_normal(phi);
+                let (p, n) = point_and_normal(&e, phi);
                 let (u, v) = (phi.cos(), phi.sin());
                 if s.target.kappa(u, v) < 0.9 {
                     continue;
                 }
                 let at =
-                    |img: &GrayView<'_>, t: f64| img.bilinear(p[0] + t * n[0], p[1] + t * n[1]);
+                    |img: &GreyImage<'_>, t: f64| bilinear(img, p[0] + t * n[0], p[1] + t * n[1]);
                 // Keep well inside the frame and away from the distractor.
                 let far = [-8.0, 8.0].iter().all(|&t| {
                     let (x, y) = (p[0] + t * n[0], p[1] + t * n[1]);
@@ -235,10 +226,13 @@ fn visible_fraction_matches_a_pixel_count_of_the_rendered_target() {
         statuses.push(truth.status);
     }
     // Free → partial → full → partial → free.
-    assert_eq!(statuses.first(), Some(&Status::Locked));
-    assert_eq!(statuses.last(), Some(&Status::Locked));
-    let lost = statuses.iter().filter(|&&s| s == Status::Lost).count();
-    let partial = statuses.iter().filter(|&&s| s == Status::Partial).count();
+    assert_eq!(statuses.first(), Some(&TrackStatus::Locked));
+    assert_eq!(statuses.last(), Some(&TrackStatus::Locked));
+    let lost = statuses.iter().filter(|&&s| s == TrackStatus::Lost).count();
+    let partial = statuses
+        .iter()
+        .filter(|&&s| s == TrackStatus::PartiallyOccluded)
+        .count();
     assert!(lost >= 3 && partial >= 6, "lost {lost}, partial {partial}");
 }
 

@@ -4,11 +4,11 @@
 use std::path::PathBuf;
 
 use trackers::Preset;
+use vision_core::BoundingBox;
 
 use crate::commands::eval::ScenarioArg;
 use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, STRIP_FRAMES};
 use crate::evaluation::SyntheticSequence;
-use crate::groundtruth::Box2;
 use crate::metrics::evaluate;
 use crate::output::write_atomic;
 use crate::plots::{all_figures, write_figures};
@@ -72,7 +72,8 @@ pub fn run(args: &Args) -> Result<()> {
     let output = seq.track(config.clone(), Some(draw))?;
     let records = &output.records;
 
-    let truth_boxes: Vec<Option<Box2>> = (0..seq.frames.len()).map(|k| seq.truth_box(k)).collect();
+    let truth_boxes: Vec<Option<BoundingBox>> =
+        (0..seq.frames.len()).map(|k| seq.truth_box(k)).collect();
     let mut written = write_tracks(args, &config, &output, &truth_boxes)?;
     let figures = all_figures(records, None)?;
     for p in write_figures(&args.out.join("plots"), &figures)? {
@@ -80,7 +81,7 @@ pub fn run(args: &Args) -> Result<()> {
             written.push(rel.display().to_string());
         }
     }
-    let boxes: Vec<Box2> = records.iter().map(|r| r.bbox).collect();
+    let boxes: Vec<BoundingBox> = records.iter().map(|r| r.bbox).collect();
     let metrics = evaluate(&boxes, &truth_boxes, Some(output.seconds.max(1e-9)))?;
     written.extend(
         [
@@ -100,8 +101,8 @@ pub fn run(args: &Args) -> Result<()> {
         particles: config.particles,
         seed: config.seed,
         frames: records.len(),
-        width: seq.frames.first().map_or(0, |f| f.gray.width),
-        height: seq.frames.first().map_or(0, |f| f.gray.height),
+        width: seq.frames.first().map_or(0, |f| f.grey.width() as usize),
+        height: seq.frames.first().map_or(0, |f| f.grey.height() as usize),
         frame_rate: None,
         initial_box: Some(seq.initial_ellipse()?.bounding_box()),
         seconds: output.seconds,
@@ -139,7 +140,7 @@ fn write_tracks(
     args: &Args,
     config: &trackers::TrackerConfig,
     output: &SessionOutput,
-    truth_boxes: &[Option<Box2>],
+    truth_boxes: &[Option<BoundingBox>],
 ) -> Result<Vec<String>> {
     let records = &output.records;
     let mut written = Vec::new();

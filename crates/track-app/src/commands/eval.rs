@@ -5,13 +5,14 @@ use std::path::{Path, PathBuf};
 use clap::Subcommand;
 use scene_synth::Scenario;
 use trackers::{Preset, SmootherSettings, TrackerConfig};
+use vision_core::BoundingBox;
 
 use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, Overrides, progress, tracker_config};
 use crate::evaluation::{
     SyntheticSequence, TABLE1_COLUMNS, TABLE1_TRACKERS, switching_csv, switching_markdown,
     switching_scores, table1, table1_csv, table1_markdown,
 };
-use crate::groundtruth::{Box2, check_groundtruth_len, first_box_in_frame, load_groundtruth};
+use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
 use crate::metrics::{SequenceMetrics, evaluate, mean_metrics, with_self_evaluation};
 use crate::output::write_atomic;
 use crate::sequence::{FrameSource, open_sequence};
@@ -365,7 +366,7 @@ pub(crate) fn track_otb(
     dir: &Path,
     config: &TrackerConfig,
     quiet: bool,
-) -> Result<(Session, usize, Vec<Option<Box2>>)> {
+) -> Result<(Session, usize, Vec<Option<BoundingBox>>)> {
     let spec = dir.to_string_lossy();
     let mut sequence = open_sequence(&spec)?;
     let gt_path = sequence.groundtruth.clone().ok_or_else(|| {

@@ -2,9 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
-use contour_obs::{ClutterSettings, GreyView, learn_clutter};
+use contour_obs::{ClutterSettings, learn_clutter};
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
+use vision_core::GreyImage;
 
 use crate::{AppError, Result};
 
@@ -80,7 +81,7 @@ pub fn run(args: &Args) -> Result<()> {
         .collect::<Result<_>>()?;
     let mut views = Vec::with_capacity(loaded.len());
     for ((w, h, data), path) in loaded.iter().zip(&args.images) {
-        views.push(GreyView::new(*w, *h, data).map_err(|e| AppError::input(path, e.to_string()))?);
+        views.push(GreyImage::new(*w, *h, data).map_err(|e| AppError::input(path, e.to_string()))?);
     }
     let mut rng = Pcg64Mcg::seed_from_u64(args.seed);
     let model = learn_clutter(&views, &settings, &mut rng).map_err(|e| match e {

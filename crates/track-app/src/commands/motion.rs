@@ -4,8 +4,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use motion_est::{
-    ImageView, MaskView, ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region, Settings,
+    MaskView, ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region, Settings,
 };
+use vision_core::GreyImage;
 
 use crate::{AppError, Result};
 
@@ -128,16 +129,13 @@ pub fn run(args: &Args) -> Result<()> {
     let estimator = MotionEstimator::new(Settings::default())
         .map_err(|e| AppError::computation("motion settings", e))?;
     let view0 =
-        ImageView::new(w, h, &f0).map_err(|e| AppError::input(&args.frame0, e.to_string()))?;
+        GreyImage::new(w, h, &f0).map_err(|e| AppError::input(&args.frame0, e.to_string()))?;
     let view1 =
-        ImageView::new(w, h, &f1).map_err(|e| AppError::input(&args.frame1, e.to_string()))?;
+        GreyImage::new(w, h, &f1).map_err(|e| AppError::input(&args.frame1, e.to_string()))?;
     let start = Instant::now();
     let est = estimator
         .estimate_images(view0, view1, &region, spec, origin)
         .map_err(|e| match e {
-            motion_est::Error::NonFinite { what: "image", .. } => {
-                AppError::input(&args.frame0, e.to_string())
-            }
             motion_est::Error::InvalidSetting { name, .. } => {
                 AppError::setting(name, e.to_string())
             }
@@ -426,8 +424,8 @@ mod tests {
         let est = MotionEstimator::new(Settings::default())
             .unwrap()
             .estimate_images(
-                ImageView::new(w, h, &f0).unwrap(),
-                ImageView::new(w, h, &f1).unwrap(),
+                GreyImage::new(w, h, &f0).unwrap(),
+                GreyImage::new(w, h, &f1).unwrap(),
                 &Region::Rect {
                     x: 10.0,
                     y: 10.0,

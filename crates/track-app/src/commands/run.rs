@@ -5,17 +5,17 @@ use std::path::{Path, PathBuf};
 use image::RgbImage;
 use indicatif::{ProgressBar, ProgressStyle};
 use trackers::{Preset, TrackerConfig};
+use vision_core::{BoundingBox, Ellipse, TrackStatus};
 
 use crate::groundtruth::{
-    Box2, Ellipse, check_groundtruth_len, first_box_in_frame, load_groundtruth, parse_box_arg,
+    BoxInFrame, check_groundtruth_len, first_box_in_frame, load_groundtruth, parse_box_arg,
     parse_ellipse_arg,
 };
 use crate::metrics::{SequenceMetrics, evaluate};
 use crate::output::write_atomic;
 use crate::plots::{all_figures, write_figures};
 use crate::record::{
-    CsvColumns, FrameRecord, Interruption, Summary, TrackerStatus, status_counts, write_csv_with,
-    write_summary,
+    CsvColumns, FrameRecord, Interruption, Summary, status_counts, write_csv_with, write_summary,
 };
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
@@ -64,7 +64,7 @@ pub struct Args {
     pub seed: Option<u64>,
     /// Initial box x,y,w,h on the first frame (default: the first labelled box of an OTB folder).
     #[arg(long, value_parser = parse_box, conflicts_with = "init_ellipse")]
-    pub init: Option<Box2>,
+    pub init: Option<BoundingBox>,
     /// Initial ellipse cx,cy,a,b,angle (angle in radians) on the first frame. Only the w-*
     /// trackers rotate; the others refuse an angle that is not a multiple of π/2.
     #[arg(long, value_parser = parse_ellipse)]
@@ -115,7 +115,7 @@ pub struct Args {
 ///
 /// # Errors
 /// The message of [`parse_box_arg`].
-pub fn parse_box(s: &str) -> std::result::Result<Box2, String> {
+pub fn parse_box(s: &str) -> std::result::Result<BoundingBox, String> {
     parse_box_arg(s, "--init").map_err(|e| e.to_string())
 }
 
@@ -391,7 +391,7 @@ struct CheckedInput {
     width: usize,
     height: usize,
     /// The ground truth of an OTB folder, one box (or none) per frame.
-    truth: Option<Vec<Option<Box2>>>,
+    truth: Option<Vec<Option<BoundingBox>>>,
     /// The first frame tracked (the first labelled one when the ground truth gives the start).
     start: usize,
     /// The contour the tracker starts from.
@@ -465,7 +465,7 @@ fn initial_contour(
     args: &Args,
     config: &TrackerConfig,
     sequence: &Sequence,
-    truth: Option<&[Option<Box2>]>,
+    truth: Option<&[Option<BoundingBox>]>,
     (width, height): (usize, usize),
 ) -> Result<(usize, Ellipse)> {
     match (args.init, args.init_ellipse, truth) {
@@ -743,10 +743,10 @@ fn boxes_with_gap(start: usize, records: &[FrameRecord]) -> String {
 fn score(
     start: usize,
     records: &[FrameRecord],
-    truth: &[Option<Box2>],
+    truth: &[Option<BoundingBox>],
     seconds: f64,
 ) -> Result<SequenceMetrics> {
-    let boxes: Vec<Box2> = records.iter().map(|r| r.bbox).collect();
+    let boxes: Vec<BoundingBox> = records.iter().map(|r| r.bbox).collect();
     let t = &truth[start..start + boxes.len()];
     evaluate(&boxes, t, Some(seconds.max(1e-9)))
 }
@@ -770,9 +770,9 @@ fn print_summary(s: &Summary, out: &Path) -> Result<()> {
     if let Some(c) = s.status_counts {
         text.push_str(&format!(
             "  status: {} locked, {} partial, {} lost\n",
-            c[TrackerStatus::Locked.index()],
-            c[TrackerStatus::Partial.index()],
-            c[TrackerStatus::Lost.index()]
+            c[TrackStatus::Locked.index()],
+            c[TrackStatus::PartiallyOccluded.index()],
+            c[TrackStatus::Lost.index()]
         ));
     }
     text.push_str(&format!("  outputs in {}\n", out.display()));

@@ -3,18 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use image::RgbImage;
-
-use super::{Frame, FrameSource, GrayFrame, Original, SequenceInfo};
+use super::{Frame, FrameSource, Original, SequenceInfo, grey_from_luma8, grey_from_rgb8};
 use crate::{AppError, Result};
-
-/// Converts 8-bit RGB to grey with the ITU-R BT.601 luma weights, the same weighting as the luma
-/// plane of a Y4M video, so both kinds of input give the trackers the same grey levels.
-fn rgb_to_gray(img: &RgbImage) -> Vec<f32> {
-    img.pixels()
-        .map(|p| 0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2]))
-        .collect()
-}
 
 /// A folder of images (PNG, JPEG, GIF, BMP, WebP, TIFF), read in the natural order of their
 /// file names.
@@ -215,21 +205,17 @@ impl FrameSource for ImageFolder {
         let Some(path) = self.paths.get(self.next).cloned() else {
             return Ok(None);
         };
-        let (original, (w, h)) = Self::decode_checked(&path, &mut self.first)?;
-        let data = match &original {
-            Original::Rgb(img) => rgb_to_gray(img),
-            Original::Luma(img) => img.as_raw().iter().map(|&v| f32::from(v)).collect(),
+        let (original, _) = Self::decode_checked(&path, &mut self.first)?;
+        let grey = match &original {
+            Original::Rgb(img) => grey_from_rgb8(img),
+            Original::Luma(img) => grey_from_luma8(img),
         };
         let index = self.next;
         self.next += 1;
         Ok(Some(Frame {
             index,
             name: path.display().to_string(),
-            gray: GrayFrame {
-                width: w as usize,
-                height: h as usize,
-                data,
-            },
+            grey,
             original,
         }))
     }
@@ -278,10 +264,10 @@ mod tests {
         let frames = read_all(&mut src).unwrap();
         assert_eq!(frames.len(), 2);
         assert!(frames[0].name.ends_with("0001.png"));
-        assert_eq!(frames[0].gray.width, 4);
+        assert_eq!(frames[0].grey.width(), 4);
         // Pixel (x = 3, y = 2): R = 32, so grey = 0.299·32 (f32 arithmetic, exact to 1e-4).
-        assert!((frames[0].gray.get(3, 2).unwrap() - 0.299 * 32.0).abs() < 1e-4);
-        assert!((frames[1].gray.data[0] - 0.587 * 255.0).abs() < 1e-3);
+        assert!((frames[0].grey.get_pixel(3, 2)[0] - 0.299 * 32.0).abs() < 1e-4);
+        assert!((frames[1].grey.as_raw()[0] - 0.587 * 255.0).abs() < 1e-3);
         assert_eq!(frames[1].index, 1);
         assert!(src.next_frame().unwrap().is_none());
     }
@@ -298,7 +284,7 @@ mod tests {
             .unwrap()
             .unwrap();
         assert!(matches!(f.original, Original::Luma(_)));
-        assert_eq!(f.gray.data, vec![7.0, 200.0, 7.0, 200.0]);
+        assert_eq!(f.grey.as_raw(), &vec![7.0, 200.0, 7.0, 200.0]);
         assert_eq!(f.original.to_rgb().get_pixel(1, 0).0, [200, 200, 200]);
     }
 

@@ -30,29 +30,29 @@ mod y4m;
 
 use std::path::{Path, PathBuf};
 
-use image::{GrayImage, RgbImage};
+use image::{GrayImage, Luma, RgbImage};
+use vision_core::GreyBuffer;
 
 use crate::{AppError, Result};
 
 pub use folder::{IMAGE_EXTENSIONS, ImageFolder, decode_image, sort_natural};
 pub use y4m::{MAX_PIXELS, MAX_SIDE, Y4mColour, Y4mHeader, Y4mSource};
 
-/// A grey image: row-major, `width × height` samples in 0–255 grey-level units.
-#[derive(Debug, Clone, PartialEq)]
-pub struct GrayFrame {
-    /// Width in pixels.
-    pub width: usize,
-    /// Height in pixels.
-    pub height: usize,
-    /// Row-major samples, `data[y * width + x]`.
-    pub data: Vec<f32>,
+/// An 8-bit grey image as the workspace's grey frame (grey levels 0–255 as f32).
+pub fn grey_from_luma8(img: &GrayImage) -> GreyBuffer {
+    GreyBuffer::from_fn(img.width(), img.height(), |x, y| {
+        Luma([f32::from(img.get_pixel(x, y)[0])])
+    })
 }
 
-impl GrayFrame {
-    /// The sample at column `x`, row `y`, or `None` outside the image.
-    pub fn get(&self, x: usize, y: usize) -> Option<f32> {
-        (x < self.width && y < self.height).then(|| self.data[y * self.width + x])
-    }
+/// An 8-bit RGB image as the workspace's grey frame, with the ITU-R BT.601 luma weights
+/// (0.299 R + 0.587 G + 0.114 B), the same weighting as the luma plane of a Y4M video, so both
+/// kinds of input give the trackers the same grey levels.
+pub fn grey_from_rgb8(img: &RgbImage) -> GreyBuffer {
+    GreyBuffer::from_fn(img.width(), img.height(), |x, y| {
+        let p = img.get_pixel(x, y);
+        Luma([0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2])])
+    })
 }
 
 /// The 8-bit original of a frame, kept for drawing overlays.
@@ -90,7 +90,7 @@ pub struct Frame {
     /// Where the frame came from, for messages: the image file, or `file.y4m#frame`.
     pub name: String,
     /// The grey image the trackers read.
-    pub gray: GrayFrame,
+    pub grey: GreyBuffer,
     /// The 8-bit original for rendering.
     pub original: Original,
 }

@@ -6,9 +6,10 @@ use std::io::{BufRead, BufReader, Cursor, Read};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use image::{GrayImage, RgbImage};
+use image::{GrayImage, Luma, RgbImage};
+use vision_core::GreyBuffer;
 
-use super::{Frame, FrameSource, GrayFrame, Original, SequenceInfo};
+use super::{Frame, FrameSource, Original, SequenceInfo};
 use crate::{AppError, Result};
 
 /// Largest frame width or height accepted from a Y4M header, pixels.
@@ -218,19 +219,17 @@ fn read_frame_raw(
 
 /// Converts one frame's planes to the grey frame (the luma plane as is) and an RGB original
 /// (full-range BT.601 conversion, chroma upsampled by repetition).
-fn convert_frame(header: &Y4mHeader, raw: &[u8]) -> (GrayFrame, Original) {
+fn convert_frame(header: &Y4mHeader, raw: &[u8]) -> (GreyBuffer, Original) {
     let (w, h) = (header.width, header.height);
     let luma = &raw[..w * h];
-    let gray = GrayFrame {
-        width: w,
-        height: h,
-        data: luma.iter().map(|&v| f32::from(v)).collect(),
-    };
+    let grey = GreyBuffer::from_fn(w as u32, h as u32, |x, y| {
+        Luma([f32::from(luma[y as usize * w + x as usize])])
+    });
     let (cw, sub) = match header.colour {
         Y4mColour::Mono => {
             let img = GrayImage::from_raw(w as u32, h as u32, luma.to_vec());
             return (
-                gray,
+                grey,
                 Original::Luma(img.unwrap_or_else(|| GrayImage::new(w as u32, h as u32))),
             );
         }
@@ -253,7 +252,7 @@ fn convert_frame(header: &Y4mHeader, raw: &[u8]) -> (GrayFrame, Original) {
             to_u8(yv + 1.772 * u),
         ]);
     }
-    (gray, Original::Rgb(rgb))
+    (grey, Original::Rgb(rgb))
 }
 
 /// Where a Y4M stream's bytes are: a file or bytes in memory can be read again by the pre-scan;
@@ -404,14 +403,14 @@ impl FrameSource for Y4mSource {
             self.buf = buf;
             return Ok(None);
         }
-        let (gray, original) = convert_frame(&self.header, &buf);
+        let (grey, original) = convert_frame(&self.header, &buf);
         self.buf = buf;
         let index = self.next;
         self.next += 1;
         Ok(Some(Frame {
             index,
             name: format!("{}#{}", self.name.display(), index + 1),
-            gray,
+            grey,
             original,
         }))
     }
@@ -478,8 +477,8 @@ mod tests {
         let frames = read_all(&mut seq.source).unwrap();
         assert_eq!(frames.len(), 2);
         assert_eq!(
-            frames[0].gray.data,
-            luma.iter().map(|&v| f32::from(v)).collect::<Vec<_>>()
+            frames[0].grey.as_raw(),
+            &luma.iter().map(|&v| f32::from(v)).collect::<Vec<_>>()
         );
         // Neutral chroma gives grey RGB equal to luma.
         assert_eq!(frames[0].original.to_rgb().get_pixel(2, 1).0, [50, 50, 50]);
@@ -500,7 +499,7 @@ mod tests {
         let streamed = read_all(&mut stream).unwrap();
         assert_eq!(streamed.len(), 2);
         for (a, b) in streamed.iter().zip(&frames) {
-            assert_eq!((&a.gray, &a.original), (&b.gray, &b.original));
+            assert_eq!((&a.grey, &a.original), (&b.grey, &b.original));
         }
         assert_eq!(streamed[1].name, "-#2");
     }
@@ -511,7 +510,7 @@ mod tests {
         let mut src = Y4mSource::from_reader(Cursor::new(bytes), Path::new("m.y4m")).unwrap();
         let f = src.next_frame().unwrap().unwrap();
         assert!(matches!(f.original, Original::Luma(_)));
-        assert_eq!(f.gray.data, vec![3.0, 4.0]);
+        assert_eq!(f.grey.as_raw(), &vec![3.0, 4.0]);
         let bytes = y4m_bytes("YUV4MPEG2 W2 H1 C444", &[vec![3, 4, 128, 128, 128, 128]]);
         let mut src = Y4mSource::from_reader(Cursor::new(bytes), Path::new("c.y4m")).unwrap();
         assert_eq!(

@@ -9,7 +9,7 @@
 //! ellipse is scaled back, so the output keeps the user's convention. (Shifting the centre as
 //! well was tried: it moved the reported centres off the annotators' and cost precision.)
 
-use contour_obs::Ellipse;
+use vision_core::Ellipse;
 
 use super::window::WorkingWindow;
 
@@ -75,7 +75,7 @@ mod tests {
             cy: 30.0,
             a: 12.0,
             b: 15.0,
-            theta: 0.0,
+            angle: 0.0,
         };
         let c = Calibration { scale: 1.18 };
         let back = c.reported(&c.tracked(&e));

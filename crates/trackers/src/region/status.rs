@@ -8,7 +8,7 @@
 //! state reads q through a Gaussian: locked around 1, lost around 0, both of spread
 //! [`SPREAD`]; the chain keeps its state with the configured persistence.
 
-use dbn_switch::{Status, StatusEstimate};
+use dbn_switch::{StatusEstimate, TrackStatus};
 
 /// Spread of the rescaled similarity q under either state.
 const SPREAD: f64 = 0.3;
@@ -70,9 +70,9 @@ impl LostChain {
         let p = self.p_lost;
         StatusEstimate {
             alpha_hat: if p > 0.5 {
-                Status::Lost
+                TrackStatus::Lost
             } else {
-                Status::Locked
+                TrackStatus::Locked
             },
             alpha_probs: [1.0 - p, 0.0, p],
             gamma_hat: p,
@@ -100,7 +100,7 @@ mod tests {
         }
         assert!(chain.p_lost() < 0.05);
         let e = chain.estimate();
-        assert_eq!(e.alpha_hat, Status::Locked);
+        assert_eq!(e.alpha_hat, TrackStatus::Locked);
         assert!((e.alpha_probs.iter().sum::<f64>() - 1.0).abs() < 1e-12);
     }
 }

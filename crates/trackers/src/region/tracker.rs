@@ -5,13 +5,13 @@
 
 use std::time::Instant;
 
-use contour_obs::Ellipse;
-use dbn_switch::{Status, StatusEstimate};
+use dbn_switch::{StatusEstimate, TrackStatus};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use smc_core::rng::{particle_rng, resampler_rng};
 use smc_core::weights::{effective_sample_size, normalize_log_weights};
 use smc_core::{Resampler, Systematic};
+use vision_core::{BoundingBox, Ellipse};
 
 use super::calibration::Calibration;
 use super::colour::{ColourBins, Histogram, is_chromatic, log_ratios};
@@ -68,7 +68,7 @@ impl Hypothesis {
             cy: self.cy,
             a: base.0 * s * r,
             b: base.1 * s / r,
-            theta: 0.0,
+            angle: 0.0,
         }
     }
 }
@@ -208,8 +208,8 @@ impl RegionTracker {
     }
 }
 
-fn bbox(e: &Ellipse) -> [f64; 4] {
-    [e.cx - e.a, e.cy - e.b, 2.0 * e.a, 2.0 * e.b]
+fn bbox(e: &Ellipse) -> BoundingBox {
+    BoundingBox::new(e.cx - e.a, e.cy - e.b, 2.0 * e.a, 2.0 * e.b)
 }
 
 fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
@@ -266,7 +266,7 @@ impl Tracker for RegionTracker {
         let start = Instant::now();
         check_initial(&ellipse)?;
         let e = Ellipse {
-            theta: 0.0,
+            angle: 0.0,
             ..ellipse
         };
         let bins = self.bins(&frame);
@@ -325,7 +325,7 @@ impl Tracker for RegionTracker {
             clutter: None,
             gamma: Some(0.0),
             status: Some(StatusEstimate {
-                alpha_hat: Status::Locked,
+                alpha_hat: TrackStatus::Locked,
                 alpha_probs: [1.0, 0.0, 0.0],
                 gamma_hat: 0.0,
             }),

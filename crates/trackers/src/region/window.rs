@@ -4,7 +4,7 @@
 //! log-ratios. Its cost depends on the window's size in working pixels only, never on the target's
 //! or the frame's size in pixels.
 
-use contour_obs::Ellipse;
+use vision_core::Ellipse;
 
 use super::colour::ColourBins;
 use crate::Result;
@@ -257,7 +257,7 @@ impl WorkingWindow {
                     cy: self.origin[1] + y * self.step,
                     a: axes.0,
                     b: axes.1,
-                    theta: 0.0,
+                    angle: 0.0,
                 };
                 let c = self.contrast(&e, ring, reference);
                 if best.is_none_or(|(_, b)| c > b) {
@@ -278,7 +278,7 @@ impl WorkingWindow {
     /// A non-finite ellipse or a buffer whose length differs from the grid's.
     pub fn patch(&self, e: &Ellipse, grid: &[[f64; 2]], out: &mut [f32]) -> Result<usize> {
         let (cx, cy, a, b) = self.to_working(e);
-        let view = motion_est::ImageView::new(self.width, self.height, &self.grey)?;
+        let view = vision_core::GreyImage::new(self.width, self.height, &self.grey)?;
         let axes = nalgebra::Matrix2::new(a, 0.0, 0.0, b);
         // Working pixel (i, j) covers [i, i + 1): its sample sits at i + 0.5.
         Ok(motion_est::sample_patch_into(

@@ -3,10 +3,11 @@
 //! tracked and its overlay handed to [`Kept`].
 
 use indicatif::ProgressBar;
+use vision_core::{BoundingBox, Ellipse};
 
 use super::Kept;
 use super::signals::StopSignals;
-use crate::groundtruth::{Box2, Ellipse};
+
 use crate::record::FrameRecord;
 use crate::sequence::{Frame, FrameSource, Source};
 use crate::session::{Session, SessionOutput};
@@ -24,7 +25,7 @@ pub(super) struct Frames<'a> {
     /// The contour the tracker starts from.
     pub init: &'a Ellipse,
     /// The ground truth, one box (or none) per frame.
-    pub truth: Option<&'a [Option<Box2>]>,
+    pub truth: Option<&'a [Option<BoundingBox>]>,
     pub signals: &'a StopSignals,
     pub bar: &'a ProgressBar,
 }

@@ -1,0 +1,16 @@
+#![doc = include_str!("../README.md")]
+#![warn(missing_docs)]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod error;
+mod geometry;
+mod image;
+mod status;
+
+pub use error::{Error, Result};
+pub use geometry::{BoundingBox, Ellipse};
+pub use image::{GreyBuffer, GreyImage};
+pub use status::{FAILURE_IOU, FAILURE_RUN, TrackStatus, first_failure};
