@@ -261,7 +261,7 @@ impl StatusHmm {
         if exploration <= 0.0 {
             return self.sample_next(previous, rng);
         }
-        let alpha = Status::from_index(self.chain.sample_next_exploring(
+        let alpha = TrackStatus::from_index(self.chain.sample_next_exploring(
             previous.alpha.index(),
             exploration,
             rng,

@@ -425,7 +425,7 @@ impl TrackerDynamics {
         let status = match &self.occlusion {
             OcclusionModel::Status(hmm) => {
                 let from = if Reacquisition::is_jump(&previous.now, &next.prev) {
-                    dbn_switch::Status::Locked
+                    dbn_switch::TrackStatus::Locked
                 } else {
                     previous.status.alpha
                 };
