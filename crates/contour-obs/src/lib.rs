@@ -70,7 +70,9 @@ mod error;
 mod image;
 mod lines;
 mod math;
+mod occlusion_forms;
 mod odobez;
+mod poisson;
 mod scan;
 mod wu;
 
@@ -89,7 +91,11 @@ pub use edges::{EdgeDetector, EdgeSettings, Polarity, detect_edges};
 pub use error::{Error, Result};
 pub use image::GreyView;
 pub use lines::{LineSettings, MeasurementLines};
+pub use occlusion_forms::{
+    OcclusionForm, ReferenceLines, WuTerm, WuTermWorkspace, validate_clutter_line_fraction,
+};
 pub use odobez::{OdobezLikelihood, OdobezSettings, odobez_line_log_term};
+pub use poisson::{log_poisson, poisson_neg_entropy};
 pub use wu::{
     LineTerms, OcclusionLikelihood, WuLikelihood, WuSettings, occlusion_line_log, wu_line_terms,
 };

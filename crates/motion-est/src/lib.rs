@@ -44,6 +44,7 @@
 pub mod error;
 pub mod estimator;
 pub mod image;
+mod implicit;
 mod meat;
 pub mod model;
 mod occlusion;
@@ -58,6 +59,7 @@ mod simd;
 pub use error::{Error, Result};
 pub use estimator::{FrameBuffers, MotionEstimate, MotionEstimator, Request, Settings, Workspace};
 pub use image::ImageView;
+pub use implicit::{ImplicitMotionSettings, ImplicitMotionTerm, PatchPose};
 pub use model::{ModelSpec, MotionModel};
 pub use odobez::odobez_state_derivative;
 pub use patch::{
