@@ -9,7 +9,8 @@
 //!   optional intensity offset c. The result carries a covariance whose predicted errors match
 //!   the observed ones (see [`estimator`] for its derivation).
 //! * [`odobez_state_derivative`]: Eq. 15, affine parameters → (Ṫx, Ṫy, ṡ, ė) with covariance.
-//! * [`sample_patch_into`], [`ncc_distance`]: Eq. 22–23.
+//! * [`sample_patch_into`], [`ncc_distance`]: Eq. 22–23; [`ImplicitMotionTerm`]: the implicit
+//!   motion likelihood ln p_c2 = −λ_c d_c they make (Eq. 22).
 //!
 //! Images are borrowed [`ImageView`]s (row-major f32 grey levels, x right, y down, pixel (i, j)
 //! centred at (i, j)). For many regions on the same frame pair, build both pyramids once with

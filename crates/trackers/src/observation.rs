@@ -50,7 +50,8 @@ pub struct LikelihoodSettings {
     pub clutter: Option<WuSettings>,
     /// The share of each measurement line on which background clutter can appear, in (0, 1]
     /// (default 1, Wu Eq. 1: the whole line; see [`contour_obs::WuTerm::clutter_line_fraction`]).
-    /// The presets use 0.5 ([`crate::config::CLUTTER_LINE_FRACTION`]).
+    /// The presets use 0.5 ([`crate::config::CLUTTER_LINE_FRACTION`]). Anything but 1 needs
+    /// [`LikelihoodSettings::clutter`].
     #[serde(default = "one")]
     pub clutter_line_fraction: f64,
     /// How Wu's likelihood reads the particle's γ (default: Wu Eq. 11–12 as printed, each line
@@ -78,8 +79,8 @@ impl Default for LikelihoodSettings {
 }
 
 impl LikelihoodSettings {
-    /// Checks every term, that at least one looks at the image, and that an occlusion form other
-    /// than the default comes with Wu's likelihood.
+    /// Checks every term, that at least one looks at the image, and that the settings of Wu's
+    /// likelihood other than their defaults (line fraction, occlusion form) come with it.
     ///
     /// # Errors
     /// [`Error::InvalidSetting`], or the error of the crate that owns the term's settings.
@@ -88,6 +89,15 @@ impl LikelihoodSettings {
             return Err(Error::InvalidSetting {
                 name: "likelihood",
                 reason: "at least one of shape, implicit_motion or clutter is needed".into(),
+            });
+        }
+        if self.clutter.is_none() && self.clutter_line_fraction != 1.0 {
+            return Err(Error::InvalidSetting {
+                name: "likelihood.clutter_line_fraction",
+                reason: format!(
+                    "{} is a setting of Wu's likelihood, which is off (no `clutter`)",
+                    self.clutter_line_fraction
+                ),
             });
         }
         if self.clutter.is_none() && self.occlusion_form != OcclusionForm::default() {
@@ -311,6 +321,24 @@ mod tests {
             ..LikelihoodSettings::default()
         };
         assert!(settings.validate().is_err());
+    }
+
+    #[test]
+    fn a_line_fraction_without_wu_likelihood_is_rejected_by_name() {
+        let settings = LikelihoodSettings {
+            shape: Some(OdobezSettings::default()),
+            clutter_line_fraction: 0.5,
+            ..LikelihoodSettings::default()
+        };
+        let err = settings.validate().unwrap_err().to_string();
+        assert!(err.contains("likelihood.clutter_line_fraction"), "{err}");
+        let bad_fraction = LikelihoodSettings {
+            clutter: Some(WuSettings::default()),
+            clutter_line_fraction: 1.5,
+            ..LikelihoodSettings::default()
+        };
+        let err = bad_fraction.validate().unwrap_err().to_string();
+        assert!(err.contains("clutter_line_fraction"), "{err}");
     }
 
     #[test]

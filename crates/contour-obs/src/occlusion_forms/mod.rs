@@ -36,7 +36,7 @@ use crate::{
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(try_from = "FormRepr", into = "FormRepr")]
 pub enum OcclusionForm {
     /// Wu Eq. 11 as printed: every line hidden independently with probability γ,
     /// γ p(Z_i | C) + (1 − γ) p(Z_i | x_i, C); γ = 0 is Eq. 6 and γ = 1 is Eq. 12 on every line.
@@ -52,7 +52,6 @@ pub enum OcclusionForm {
     /// target is.
     Independent {
         /// The share s of a hidden line's count from an unknown occluder, in [0, 1].
-        #[serde(default)]
         unknown_occluder_share: f64,
     },
     /// γ read as the hidden *fraction* of the contour, the hidden lines one contiguous arc,
@@ -67,7 +66,6 @@ pub enum OcclusionForm {
     /// position (ln n at most) and an occluder must hide a connected part.
     Arc {
         /// The share s of a hidden line's count from an unknown occluder, in [0, 1].
-        #[serde(default)]
         unknown_occluder_share: f64,
     },
     /// The arc of [`OcclusionForm::Arc`] with every hidden line scored by the same constant
@@ -97,6 +95,70 @@ impl Default for OcclusionForm {
     fn default() -> Self {
         Self::Independent {
             unknown_occluder_share: 0.0,
+        }
+    }
+}
+
+/// The name of an [`OcclusionForm`] in a configuration file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum FormName {
+    Independent,
+    Arc,
+    NeutralArc,
+    Ratio,
+}
+
+/// The configuration-file shape of an [`OcclusionForm`]: its name under `form` and the
+/// parameters beside it. A parameter the form does not use is refused, not ignored.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FormRepr {
+    form: FormName,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    unknown_occluder_share: Option<f64>,
+}
+
+impl TryFrom<FormRepr> for OcclusionForm {
+    type Error = String;
+
+    fn try_from(r: FormRepr) -> std::result::Result<Self, String> {
+        let share = r.unknown_occluder_share;
+        Ok(match (r.form, share) {
+            (FormName::Independent, s) => Self::Independent {
+                unknown_occluder_share: s.unwrap_or(0.0),
+            },
+            (FormName::Arc, s) => Self::Arc {
+                unknown_occluder_share: s.unwrap_or(0.0),
+            },
+            (FormName::NeutralArc, None) => Self::NeutralArc,
+            (FormName::Ratio, None) => Self::Ratio,
+            (FormName::NeutralArc | FormName::Ratio, Some(_)) => {
+                return Err(format!(
+                    "unknown_occluder_share is not a parameter of the form {:?}: only \
+                     independent and arc have it",
+                    r.form
+                ));
+            }
+        })
+    }
+}
+
+impl From<OcclusionForm> for FormRepr {
+    fn from(f: OcclusionForm) -> Self {
+        let (form, unknown_occluder_share) = match f {
+            OcclusionForm::Independent {
+                unknown_occluder_share: s,
+            } => (FormName::Independent, Some(s)),
+            OcclusionForm::Arc {
+                unknown_occluder_share: s,
+            } => (FormName::Arc, Some(s)),
+            OcclusionForm::NeutralArc => (FormName::NeutralArc, None),
+            OcclusionForm::Ratio => (FormName::Ratio, None),
+        };
+        Self {
+            form,
+            unknown_occluder_share,
         }
     }
 }
@@ -409,7 +471,24 @@ mod tests {
         }
         // Parameters a form does not use cannot be given to it.
         let bad = r#"{"form": "ratio", "unknown_occluder_share": 0.5}"#;
-        assert!(serde_json::from_str::<OcclusionForm>(bad).is_err());
+        let err = serde_json::from_str::<OcclusionForm>(bad)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("unknown_occluder_share"), "{err}");
+        let unknown = r#"{"form": "arc", "neutral_hidden_lines": true}"#;
+        assert!(serde_json::from_str::<OcclusionForm>(unknown).is_err());
+        // Every form survives a round trip.
+        for form in [
+            OcclusionForm::default(),
+            OcclusionForm::Arc {
+                unknown_occluder_share: 0.25,
+            },
+            OcclusionForm::NeutralArc,
+            OcclusionForm::Ratio,
+        ] {
+            let json = serde_json::to_string(&form).unwrap();
+            assert_eq!(serde_json::from_str::<OcclusionForm>(&json).unwrap(), form);
+        }
         let good = r#"{"form": "independent", "unknown_occluder_share": 0.5}"#;
         assert_eq!(
             serde_json::from_str::<OcclusionForm>(good).unwrap(),
