@@ -221,7 +221,7 @@ fn assert_rise_and_fall(preset: Preset, seeds: std::ops::RangeInclusive<u64>) {
 fn occlusion_estimate_rises_while_hidden_and_falls_after() {
     // Issue 7: w-occ's γ̂ rises during the occlusion and falls after it. Both occlusion presets
     // read γ as the hidden fraction of the contour, hidden as one arc whose lines all score one
-    // constant (`LikelihoodSettings::occlusion_arc`, `neutral_hidden_lines`), so "whole contour
+    // constant (`contour_obs::OcclusionForm::NeutralArc`), so "whole contour
     // at the true pose, partly hidden" beats "shrunk onto the visible sliver", the hidden target
     // coasts, and the reacquisition jump finds it again. w-occ's γ is Wu's random walk with
     // σ_γ = 0.3 (`W_OCC_SIGMA_GAMMA`), w-eval's the status HMM's.

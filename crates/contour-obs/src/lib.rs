@@ -1,6 +1,6 @@
 //! The observation layer of both papers, usable without particles: contour templates under a 2-D
 //! affine pose, measurement lines along the contour normals, a 1-D edge detector, three contour
-//! likelihoods and clutter learning.
+//! likelihoods, the forms of Wu's occlusion likelihood and clutter learning.
 //!
 //! - [`Contour`] / [`Template`]: the unit circle (ellipse template, also from a conic fit,
 //!   [`fit_ellipse`], Wu §6) or a closed cubic B-spline, sampled at n points with outward normals.
@@ -13,6 +13,10 @@
 //!   term of docs/MODELS.md; per-line pieces by [`WuLikelihood::line_terms`].
 //!   [`OcclusionLikelihood`]: Wu Eq. 11–12. All in logs, finite for lines without edges, contours
 //!   leaving the image and λ → 0; each has a batch form over many poses on one frame.
+//! - [`WuTerm`]: Wu's likelihood as a tracker's contour term, in the one [`OcclusionForm`] chosen
+//!   (Eq. 11 as printed, optionally with an occluder of unknown texture; γ as one hidden arc,
+//!   with Eq. 12 or a neutral constant on the hidden lines; or a ratio against the no-target
+//!   lines, [`ReferenceLines`]). [`log_poisson`] is the Poisson law of Eq. 1, in logs.
 //! - [`learn_clutter`]: Wu §6.1, random lines + k-means → [`ClutterModel`].
 //!
 //! Speed (the trackers evaluate hundreds of hypotheses per frame): the edge definition is the
@@ -71,7 +75,9 @@ mod error;
 mod image;
 mod lines;
 mod math;
+mod occlusion_forms;
 mod odobez;
+mod poisson;
 mod scan;
 mod wu;
 
@@ -90,7 +96,11 @@ pub use edges::{EdgeDetector, EdgeSettings, Polarity, detect_edges};
 pub use error::{Error, Result};
 pub use image::Bilinear;
 pub use lines::{LineSettings, MeasurementLines};
+pub use occlusion_forms::{
+    OcclusionForm, ReferenceLines, WuTerm, WuTermWorkspace, validate_clutter_line_fraction,
+};
 pub use odobez::{OdobezLikelihood, OdobezSettings, odobez_line_log_term};
+pub use poisson::{log_poisson, poisson_neg_entropy};
 pub use wu::{
     LineTerms, OcclusionLikelihood, WuLikelihood, WuSettings, occlusion_line_log, wu_line_terms,
 };

@@ -34,9 +34,11 @@ impl LnFactorial {
     pub(crate) fn get(&self, m: usize) -> f64 {
         match self.table.get(m) {
             Some(v) => *v,
+            // Accumulated in the same order as the table, so that every m gives the bits of
+            // the plain sum ln 2 + ln 3 + … + ln m (`crate::log_poisson`).
             None => {
                 let last = self.table.len() - 1;
-                self.table[last] + (last + 1..=m).map(|k| (k as f64).ln()).sum::<f64>()
+                (last + 1..=m).fold(self.table[last], |acc, k| acc + (k as f64).ln())
             }
         }
     }

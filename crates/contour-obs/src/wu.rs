@@ -6,6 +6,7 @@ use vision_core::GreyImage;
 
 use crate::math::{LnFactorial, log_add_exp};
 use crate::odobez::{Batch, check_len, ensure_workspace, run_batch};
+use crate::poisson::log_poisson_with;
 use crate::{Affine2, Contour, Error, LineSettings, MeasurementLines, Result, Template};
 
 /// The largest window W in units of σ accepted by [`WuSettings::validate`].
@@ -210,7 +211,7 @@ impl LineModel {
         density: &Density,
     ) -> (f64, Option<f64>) {
         let (mu, ln_mu) = density.mu(length);
-        let ln_n = m_l as f64 * ln_mu - mu - self.ln_fact.get(m_l);
+        let ln_n = log_poisson_with(m_l, mu, ln_mu, self.ln_fact.get(m_l));
         let mut m_w = 0usize;
         let mut sum_g = 0.0;
         for z in candidates {

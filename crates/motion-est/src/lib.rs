@@ -9,7 +9,8 @@
 //!   optional intensity offset c. The result carries a covariance whose predicted errors match
 //!   the observed ones (see [`estimator`] for its derivation).
 //! * [`odobez_state_derivative`]: Eq. 15, affine parameters → (Ṫx, Ṫy, ṡ, ė) with covariance.
-//! * [`sample_patch_into`], [`ncc_distance`]: Eq. 22–23.
+//! * [`sample_patch_into`], [`ncc_distance`]: Eq. 22–23; [`ImplicitMotionTerm`]: the implicit
+//!   motion likelihood ln p_c2 = −λ_c d_c they make (Eq. 22).
 //!
 //! Images are borrowed [`vision_core::GreyImage`]s (row-major f32 grey levels, x right, y down, pixel (i, j)
 //! centred at (i, j)). For many regions on the same frame pair, build both pyramids once with
@@ -44,6 +45,7 @@
 
 pub mod error;
 pub mod estimator;
+mod implicit;
 mod meat;
 pub mod model;
 mod occlusion;
@@ -57,6 +59,7 @@ mod simd;
 
 pub use error::{Error, Result};
 pub use estimator::{FrameBuffers, MotionEstimate, MotionEstimator, Request, Settings, Workspace};
+pub use implicit::{ImplicitMotionSettings, ImplicitMotionTerm, PatchPose};
 pub use model::{ModelSpec, MotionModel};
 pub use odobez::odobez_state_derivative;
 pub use patch::{

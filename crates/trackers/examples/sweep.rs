@@ -6,9 +6,9 @@
 //! FRAMES, RHO and SRHO (velocity retention of translation and shape), ST, SS, SSH (noise of
 //! translation, scale and shape), LC (λ_c), TOL, IT, LEV, MINPIX (motion estimator), EST (use the
 //! plain weighted mean), WIN and PD (Wu's window and detection probability), OA0 (no
-//! occlusion-aware proposal), WS0 (no warm start), DEFSET (accurate motion settings), RATIO=1
-//! (the ratio form of Wu's likelihood, `LikelihoodSettings::likelihood_ratio`), ARC=1/0 and NEUTRAL=1/0
-//! (`LikelihoodSettings::occlusion_arc`, `neutral_hidden_lines`), LGR (κ of γ | locked,
+//! occlusion-aware proposal), WS0 (no warm start), DEFSET (accurate motion settings),
+//! FORM=independent|arc|neutral_arc|ratio and UO=share (the occlusion form of Wu's likelihood,
+//! `contour_obs::OcclusionForm`, and its unknown-occluder share), LGR (κ of γ | locked,
 //! `DynamicsSettings::locked_gamma_rate`), SREV (`DynamicsSettings::shape_reversion`), LOCKLO, LOCKHI, PARTLO, PARTHI (the status HMM's γ
 //! ranges), SIGG (σ_γ of the random-walk γ), TLP (its locked → partially occluded probability), V (per-seed
 //! lines), REACQ=1/0 (reacquisition jump on/off, `TrackerConfig::reacquisition`) with RQLOCK,
@@ -19,12 +19,48 @@
 //! partly hidden going in, hidden, partly hidden coming out, free after; "share of γ̂ MAE" is
 //! the phase's part of the overall γ̂ MAE), to see which phase the errors come from.
 
+use contour_obs::OcclusionForm;
 use scene_synth::{Scenario, ScenarioParams, Scene};
 use trackers::{Frame, Preset, build};
 use vision_core::{Ellipse, FAILURE_RUN, GreyImage, first_failure};
 fn env(k: &str) -> Option<f64> {
     std::env::var(k).ok().and_then(|v| v.parse().ok())
 }
+/// The occlusion form of Wu's likelihood from FORM (independent, arc, neutral_arc, ratio) and
+/// UO (the unknown-occluder share of the independent form and the arc), over `current`.
+fn occlusion_form(current: OcclusionForm) -> Option<OcclusionForm> {
+    let form = std::env::var("FORM").ok();
+    let share = env("UO");
+    if form.is_none() && share.is_none() {
+        return None;
+    }
+    let old_share = match current {
+        OcclusionForm::Independent {
+            unknown_occluder_share: s,
+        }
+        | OcclusionForm::Arc {
+            unknown_occluder_share: s,
+        } => s,
+        _ => 0.0,
+    };
+    let unknown_occluder_share = share.unwrap_or(old_share);
+    let arc = OcclusionForm::Arc {
+        unknown_occluder_share,
+    };
+    let independent = OcclusionForm::Independent {
+        unknown_occluder_share,
+    };
+    Some(match form.as_deref() {
+        Some("arc") => arc,
+        Some("neutral_arc") => OcclusionForm::NeutralArc,
+        Some("ratio") => OcclusionForm::Ratio,
+        Some("independent") => independent,
+        Some(other) => panic!("FORM={other}: one of independent, arc, neutral_arc, ratio"),
+        None if matches!(current, OcclusionForm::Arc { .. }) => arc,
+        None => independent,
+    })
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let sc = match args[1].as_str() {
@@ -145,17 +181,8 @@ fn main() {
         if let (Some(v), Some(w)) = (env("PD"), c.likelihood.clutter.as_mut()) {
             w.p_detect = v;
         }
-        if let Some(v) = env("UO") {
-            c.likelihood.unknown_occluder_share = v;
-        }
-        if let Some(v) = env("ARC") {
-            c.likelihood.occlusion_arc = v > 0.0;
-        }
-        if let Some(v) = env("NEUTRAL") {
-            c.likelihood.neutral_hidden_lines = v > 0.0;
-        }
-        if let Some(v) = env("RATIO") {
-            c.likelihood.likelihood_ratio = v > 0.0;
+        if let Some(form) = occlusion_form(c.likelihood.occlusion_form) {
+            c.likelihood.occlusion_form = form;
         }
         if env("REACQ").is_some_and(|v| v > 0.0) {
             c.reacquisition.get_or_insert_with(Default::default);

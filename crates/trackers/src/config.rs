@@ -11,6 +11,7 @@ use crate::reacquire::ReacquisitionSettings;
 use crate::region::RegionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
+use contour_obs::OcclusionForm;
 
 /// Settings of Odobez's motion proposal (Eq. 16) and of the motion estimates behind p_c1.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -283,8 +284,8 @@ pub const SHAPE_VELOCITY_RETENTION: f64 = 0.5;
 pub const CLUTTER_LINE_FRACTION: f64 = 0.5;
 
 /// The share of an occluded line's edge count given to an occluder of unknown texture in full
-/// (see [`LikelihoodSettings::unknown_occluder_share`]; w-occ and w-eval read γ through the
-/// occlusion arc instead, [`OCCLUSION_ARC`]). With the share alone, a contour shrinks onto the
+/// (see [`OcclusionForm::Independent`]; w-occ and w-eval read γ through the neutral
+/// occlusion arc instead, [`OCCLUSION_ARC`], which has no share). With the share alone, a contour shrinks onto the
 /// visible sliver of a target sliding behind the `occlusion` scene's occluder and γ̂ stays near
 /// 0 (w-occ: 0.07 against 0.93 while the target is hidden). Measured on the `mclutter` scene (120 frames, 200 particles, seeds 1–4, mean IoU, lost
 /// tracks): w-occ 0.805 / 1 lost with 0 (Wu Eq. 12 as printed), 0.907 / 0 with 0.5, 0.904 / 0
@@ -293,10 +294,10 @@ pub const CLUTTER_LINE_FRACTION: f64 = 0.5;
 pub const UNKNOWN_OCCLUDER_SHARE: f64 = 0.5;
 
 /// Whether w-occ and w-eval read γ as the hidden fraction of the contour, hidden as one arc,
-/// with every hidden (or off-image) line scored by one constant (see
-/// [`LikelihoodSettings::occlusion_arc`] and [`LikelihoodSettings::neutral_hidden_lines`]).
-/// Wu's Eq. 11–12 as printed stays available by turning both off (w-occ used it until the
-/// seventh pass, see [`W_OCC_SIGMA_GAMMA`]); full keeps the independent mixture, because with the
+/// with every hidden (or off-image) line scored by one constant ([`OcclusionForm::NeutralArc`]);
+/// `false` gives them the independent mixture of full ([`OcclusionForm::Independent`] with
+/// [`UNKNOWN_OCCLUDER_SHARE`]). Wu's Eq. 11–12 as printed stays available as
+/// `OcclusionForm::default()` (w-occ used it until the seventh pass, see [`W_OCC_SIGMA_GAMMA`]); full keeps the independent mixture, because with the
 /// arc its Table 1 S2 column (100 particles) fell from 100 % to 90 % over 10 trials and to 94 %
 /// over 50 (100 % without the arc), below the 95 % target, although its sweeps improved.
 /// Measured (sweep, 120 frames, 200 particles, seeds 1–4, mean IoU, in brackets the mean IoU after the full occlusion, lost tracks): `occlusion` w-eval
@@ -434,9 +435,13 @@ impl Preset {
             ..LikelihoodSettings::default()
         };
         let occlusion_likelihood = LikelihoodSettings {
-            unknown_occluder_share: UNKNOWN_OCCLUDER_SHARE,
-            occlusion_arc: OCCLUSION_ARC,
-            neutral_hidden_lines: OCCLUSION_ARC,
+            occlusion_form: if OCCLUSION_ARC {
+                OcclusionForm::NeutralArc
+            } else {
+                OcclusionForm::Independent {
+                    unknown_occluder_share: UNKNOWN_OCCLUDER_SHARE,
+                }
+            },
             ..clutter_only.clone()
         };
         let fixed_beta = ClutterConfig {
@@ -531,12 +536,11 @@ impl Preset {
                     clutter: Some(Default::default()),
                     clutter_line_fraction: CLUTTER_LINE_FRACTION,
                     shape: None,
-                    unknown_occluder_share: UNKNOWN_OCCLUDER_SHARE,
-                    likelihood_ratio: false,
-                    // Off: with it, Table 1's S2 column (100 particles) fell to 94 % over
-                    // 50 trials for full (docs/RESULTS.md), below the 95 % target.
-                    occlusion_arc: false,
-                    neutral_hidden_lines: false,
+                    // Not the arc: with it, Table 1's S2 column (100 particles) fell below
+                    // the 95 % target for full (docs/RESULTS.md).
+                    occlusion_form: OcclusionForm::Independent {
+                        unknown_occluder_share: UNKNOWN_OCCLUDER_SHARE,
+                    },
                 },
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::Status(StatusConfig::default()),
