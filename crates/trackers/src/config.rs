@@ -17,8 +17,8 @@ use contour_obs::OcclusionForm;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MotionSettings {
-    /// The robust estimator (Odobez §4.2). Default `motion_est::Settings::tracking()`: 0.01 px
-    /// tolerance, at most 8 iterations per level — a particle cloud needs no better.
+    /// The robust estimator (Odobez §4.2). Default `motion_est::Settings::tracking()`: 0.1 px
+    /// tolerances, at most 8 iterations per level — a particle cloud needs no better.
     pub estimator: motion_est::Settings,
     /// Start each cluster's estimate from the previous cluster's (default true): clusters of one
     /// frame cover nearly the same region, so the estimator can skip its coarse levels.
@@ -33,10 +33,9 @@ pub struct MotionSettings {
     /// Lloyd iterations of the clustering (default 3).
     pub cluster_iterations: usize,
     /// Mix the prior into the motion proposal by each particle's occlusion γ (no effect without
-    /// an occlusion model). See `proposal::MotionProposal::occlusion_aware`. Default false: on
-    /// the `mclutter` scene (40 frames, 8 seeds) `full` measured mean IoU 0.85 with one lost track
-    /// with it against 0.91 and none without, and it did not carry the target through the full
-    /// occlusion of the `occlusion` scene either (docs/RESULTS.md).
+    /// an occlusion model). See `proposal::MotionProposal::occlusion_aware`. Default false: it lost
+    /// tracks on `mclutter` and did not carry the target through the full occlusion of the
+    /// `occlusion` scene either (docs/RESULTS.md, decision log).
     #[serde(default)]
     pub occlusion_aware: bool,
 }
@@ -147,11 +146,8 @@ pub struct TrackerConfig {
     #[serde(default = "default_init_spread")]
     pub init_spread: f64,
     /// The reacquisition jump after an occlusion (see [`ReacquisitionSettings`](crate::ReacquisitionSettings)); `None`: off. On in
-    /// w-occ, w-eval and full. Measured (sweep, 120 frames, 200 particles, seeds 1–4; mean IoU over the
-    /// frames after the full occlusion of the `occlusion` scene): w-eval 0 → 0.81 (4 of 4 tracks
-    /// found again), full 0 → 0.50 (2 of 4 found, 1 half); `mclutter` and `distractor` unchanged
-    /// within Monte Carlo noise (docs/RESULTS.md); w-occ since the seventh pass, see
-    /// [`W_OCC_SIGMA_GAMMA`]. With Wu's Eq. 12 as printed the jump does not help: a lost track
+    /// w-occ, w-eval and full: it lets a track find the target again after a full occlusion
+    /// (docs/RESULTS.md, decision log). With Wu's Eq. 12 as printed the jump does not help: a lost track
     /// sits on γ ≈ 1 hypotheses that Eq. 12 rates above the reappearing target.
     #[serde(default)]
     pub reacquisition: Option<ReacquisitionSettings>,
@@ -273,56 +269,41 @@ impl TrackerConfig {
 
 /// ρ of the size and shape components in every preset: 0.5, not the papers' 1. With ρ = 1 the
 /// velocity of scale, aspect and shear is a random walk that, over a hundred frames, deforms the
-/// contour on clutter (measured on the `mclutter` scene, 60 frames, 3 seeds: mean IoU 0.50 → 0.90
-/// for m1 and 0.29 → 0.90 for w-hmm); translation keeps ρ = 1 as in Odobez Eq. 17.
+/// contour on clutter (docs/RESULTS.md, decision log); translation keeps ρ = 1 as in Odobez
+/// Eq. 17.
 pub const SHAPE_VELOCITY_RETENTION: f64 = 0.5;
 
 /// The share of a measurement line where background clutter can appear, in every preset with
-/// Wu's likelihood (see [`LikelihoodSettings::clutter_line_fraction`]). Measured on the
-/// `mclutter` scene with w-hmm: β̂ accuracy 46 % with 1 (Wu Eq. 1 as printed), see
-/// docs/RESULTS.md for 0.5.
+/// Wu's likelihood (see [`LikelihoodSettings::clutter_line_fraction`]). Half of each measurement
+/// line lies on the target; with Wu Eq. 1's whole line, λ̂ comes out at half the background
+/// density and β̂ picks the wrong class (docs/RESULTS.md, decision log).
 pub const CLUTTER_LINE_FRACTION: f64 = 0.5;
 
 /// The share of an occluded line's edge count given to an occluder of unknown texture in full
 /// (see [`OcclusionForm::Independent`]; w-occ and w-eval read γ through the neutral
 /// occlusion arc instead, [`OCCLUSION_ARC`], which has no share). With the share alone, a contour shrinks onto the
 /// visible sliver of a target sliding behind the `occlusion` scene's occluder and γ̂ stays near
-/// 0 (w-occ: 0.07 against 0.93 while the target is hidden). Measured on the `mclutter` scene (120 frames, 200 particles, seeds 1–4, mean IoU, lost
-/// tracks): w-occ 0.805 / 1 lost with 0 (Wu Eq. 12 as printed), 0.907 / 0 with 0.5, 0.904 / 0
-/// with 1; w-eval 0.798 / 1, 0.902 / 0, 0.899 / 0; full 0.909, 0.919, 0.916. Half-and-half keeps
-/// Wu's background law for occluders that look like the background.
+/// 0 while the target is hidden. On `mclutter`, a share of 0.5 or 1 keeps tracks that 0 (Wu Eq. 12
+/// as printed) loses (docs/RESULTS.md, decision log); half-and-half keeps Wu's background law for
+/// occluders that look like the background.
 pub const UNKNOWN_OCCLUDER_SHARE: f64 = 0.5;
 
 /// Whether w-occ and w-eval read γ as the hidden fraction of the contour, hidden as one arc,
 /// with every hidden (or off-image) line scored by one constant ([`OcclusionForm::NeutralArc`]);
 /// `false` gives them the independent mixture of full ([`OcclusionForm::Independent`] with
 /// [`UNKNOWN_OCCLUDER_SHARE`]). Wu's Eq. 11–12 as printed stays available as
-/// `OcclusionForm::default()` (w-occ used it until the seventh pass, see [`W_OCC_SIGMA_GAMMA`]); full keeps the independent mixture, because with the
-/// arc its Table 1 S2 column (100 particles) fell from 100 % to 90 % over 10 trials and to 94 %
-/// over 50 (100 % without the arc), below the 95 % target, although its sweeps improved.
-/// Measured (sweep, 120 frames, 200 particles, seeds 1–4, mean IoU, in brackets the mean IoU after the full occlusion, lost tracks): `occlusion` w-eval
-/// 0.607 [0.814] → 0.731 [0.874], full 0.539 [0.504] → 0.645 [0.710]; `mclutter` w-eval
-/// 0.902 → 0.906, full 0.909 → 0.918; `distractor` w-eval 0.589 / 2 lost → 0.720 / 1, full
-/// 0.910 → 0.914; and γ̂ now rises while the target is hidden (docs/RESULTS.md).
+/// `OcclusionForm::default()`; full keeps the independent mixture, because with the arc its
+/// Table 1 S2 column fell below the 95 % target (docs/RESULTS.md, decision log). With the arc,
+/// γ̂ rises while the target is hidden and falls after it.
 pub const OCCLUSION_ARC: bool = true;
 
 /// σ_γ of w-occ's random-walk γ (Wu §6.2 and docs/MODELS.md: 0.1). w-occ reads γ through the
 /// occlusion arc ([`OCCLUSION_ARC`]) and has the reacquisition jump, as w-eval; with σ_γ = 0.1 a
 /// random walk is too slow to follow a target that slides behind an occluder in 20 frames, and
-/// the contour shrinks onto the visible sliver instead. Measured (sweep, 120 frames, 200
-/// particles, seeds 1–8; mean IoU, and on `occlusion` β̂ accuracy / γ̂ MAE; docs/RESULTS.md,
-/// seventh pass):
-///
-/// | w-occ | occlusion | mclutter | distractor |
-/// |---|---|---|---|
-/// | Wu as printed (Eq. 11–12, σ_γ 0.1, no jump) | 0.323 (38.0 % / 0.402) | 0.787 | 0.299 |
-/// | arc + jump, σ_γ 0.1 | 0.617 (91.6 % / 0.176) | 0.903 | 0.754 |
-/// | arc + jump, σ_γ 0.2 | 0.671 (94.0 % / 0.149) | 0.895 | 0.594 |
-/// | arc + jump, σ_γ 0.3 | 0.672 (92.4 % / 0.126) | 0.907 | 0.656 |
-///
-/// With 0.3, γ̂ rises while the target is hidden and falls after it on all eight seeds
-/// (`tests/tracking.rs`); with 0.1 it does not rise on three of them. The price is the
-/// `distractor` scene, where a larger σ_γ lets γ explain the mismatch of a zooming target.
+/// the contour shrinks onto the visible sliver instead. With 0.3, γ̂ rises while the target is
+/// hidden and falls after it on every seed `tests/tracking.rs` checks; the price is the zooming
+/// `distractor` scene, where a larger σ_γ lets γ explain the mismatch of a zooming target
+/// (docs/RESULTS.md, decision log).
 pub const W_OCC_SIGMA_GAMMA: f64 = 0.3;
 
 /// Most particles a configuration may ask for: beyond this a frame takes seconds and the
