@@ -594,28 +594,16 @@ impl Tracker for ParticleTracker {
             clusters: &self.clusters,
             reference: &self.reference,
         };
+        let filter = &mut self.filter;
         let weighted = match self.config.proposal {
             ProposalKind::Prior if self.config.dynamics.hidden_exploration > 0.0 => {
                 let proposal = ExploringPrior(&self.dynamics);
-                self.filter.propagate(&mut set, &proposal, seed, step);
-                self.filter.weight(
-                    &mut set,
-                    &proposal,
-                    Some(&self.dynamics),
-                    &observation,
-                    step,
-                )
+                let prior = Some(&self.dynamics);
+                propagate_and_weight(filter, &mut set, &proposal, prior, &observation, seed, step)
             }
             ProposalKind::Prior => {
                 let proposal = Bootstrap(&self.dynamics);
-                self.filter.propagate(&mut set, &proposal, seed, step);
-                self.filter.weight(
-                    &mut set,
-                    &proposal,
-                    None::<&TrackerDynamics>,
-                    &observation,
-                    step,
-                )
+                propagate_and_weight(filter, &mut set, &proposal, None, &observation, seed, step)
             }
             ProposalKind::Motion => {
                 let proposal = MotionProposal {
@@ -623,14 +611,8 @@ impl Tracker for ParticleTracker {
                     clusters: &self.clusters,
                     occlusion_aware: self.config.motion.occlusion_aware,
                 };
-                self.filter.propagate(&mut set, &proposal, seed, step);
-                self.filter.weight(
-                    &mut set,
-                    &proposal,
-                    Some(&self.dynamics),
-                    &observation,
-                    step,
-                )
+                let prior = Some(&self.dynamics);
+                propagate_and_weight(filter, &mut set, &proposal, prior, &observation, seed, step)
             }
         };
         let weighted = match weighted {
@@ -746,4 +728,19 @@ impl Tracker for ParticleTracker {
             })
             .collect()
     }
+}
+
+/// Odobez Eq. 3 for one frame: draws every particle from `proposal`, then weights it by the
+/// observation times p/q (`prior = None`: q is the prior and the ratio is 1, never evaluated).
+fn propagate_and_weight<P: smc_core::Proposal<State = Particle>>(
+    filter: &mut ParticleFilter<Particle>,
+    set: &mut ParticleSet<Particle>,
+    proposal: &P,
+    prior: Option<&TrackerDynamics>,
+    observation: &FrameObservation<'_>,
+    seed: u64,
+    step: u64,
+) -> smc_core::Result<smc_core::WeightReport> {
+    filter.propagate(set, proposal, seed, step);
+    filter.weight(set, proposal, prior, observation, step)
 }

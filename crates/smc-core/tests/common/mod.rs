@@ -44,6 +44,7 @@ impl Dynamics for Ar1 {
 
 /// The Kalman filter of a model observed through N(0, r) noise: predicted and filtered means and
 /// (co)variances per step, and the total log-evidence ln p(z_1..z_T).
+#[derive(Default)]
 pub struct Kalman<M, P> {
     pub predicted_means: Vec<M>,
     pub predicted_covs: Vec<P>,
@@ -55,13 +56,7 @@ pub struct Kalman<M, P> {
 /// The Kalman filter of the AR(1) model from x_0 ~ N(m0, p0).
 pub fn kalman_1d(model: Ar1, r: f64, m0: f64, p0: f64, zs: &[f64]) -> Kalman<f64, f64> {
     let (mut m, mut p) = (m0, p0);
-    let mut out = Kalman {
-        predicted_means: vec![],
-        predicted_covs: vec![],
-        means: vec![],
-        covs: vec![],
-        log_evidence: 0.0,
-    };
+    let mut out = Kalman::default();
     for &z in zs {
         m *= model.a;
         p = model.a * model.a * p + model.q;
@@ -184,13 +179,7 @@ impl Dynamics for ConstantVelocity {
 pub fn kalman_2d(m0: [f64; 2], p0: M2, r: f64, zs: &[f64]) -> Kalman<[f64; 2], M2> {
     let q = q_matrix();
     let (mut m, mut p) = (m0, p0);
-    let mut out = Kalman {
-        predicted_means: vec![],
-        predicted_covs: vec![],
-        means: vec![],
-        covs: vec![],
-        log_evidence: 0.0,
-    };
+    let mut out = Kalman::default();
     for &z in zs {
         m = ConstantVelocity::predict(&m);
         p = add(&mul(&mul(&F, &p), &transpose(&F)), &q, 1.0);
