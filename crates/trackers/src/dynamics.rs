@@ -116,8 +116,8 @@ pub struct DynamicsSettings {
     /// drawn uniformly over the states instead of from `T` (default 0: the papers' prior
     /// proposal). A defensive proposal `q = (1 − ε)·T + ε·uniform`: the weight carries
     /// `T / q` (Odobez Eq. 3), so the filter's target is unchanged, while a sticky `T` (a learnt
-    /// one, diagonal near 1) keeps particles in every class to switch to. See
-    /// [`TrackerDynamics::log_hidden_exploration_ratio`].
+    /// one, diagonal near 1) keeps particles in every class to switch to (the ratio:
+    /// `TrackerDynamics::log_hidden_exploration_ratio`).
     #[serde(default)]
     pub hidden_exploration: f64,
 }
