@@ -29,9 +29,10 @@
 //! few near-ancestral lines happen to carry (docs/RESULTS.md).
 
 use dbn_switch::{
-    ClutterEstimate, MarkovChain, OcclusionState, StatusEstimate, TrackStatus, argmax,
+    ClutterEstimate, ClutterHmm, MarkovChain, OcclusionProcess, OcclusionState, StatusEstimate,
+    StatusHmm, TrackStatus, argmax,
 };
-use smc_core::{History, TransitionDensity};
+use smc_core::{Frame, History, TransitionDensity};
 
 use crate::Result;
 use crate::dynamics::{ClutterProcess, OcclusionModel, TrackerDynamics};
@@ -79,6 +80,36 @@ fn class_sums<'a>(
     (mass, sums)
 }
 
+/// Per frame of `frames`, [`class_sums`] of its filtered particles.
+fn frame_sums(
+    frames: &[&Frame<Particle>],
+    classes: usize,
+    class_of: impl Fn(&Particle) -> usize + Copy,
+    value: impl Fn(&Particle) -> f64 + Copy,
+) -> Vec<(Vec<f64>, Vec<f64>)> {
+    frames
+        .iter()
+        .map(|f| {
+            let weighted = f.set.states().iter().zip(f.set.weights().iter().copied());
+            class_sums(weighted, classes, class_of, value)
+        })
+        .collect()
+}
+
+/// The filtered class masses of [`frame_sums`], the input of `smooth_filtered`.
+fn masses(sums: &[(Vec<f64>, Vec<f64>)]) -> Vec<Vec<f64>> {
+    sums.iter().map(|(m, _)| m.clone()).collect()
+}
+
+/// E[value | class k] from a frame's class sums, `fallback` for a class without mass.
+fn conditional_mean(mass: &[f64], sums: &[f64], k: usize, fallback: f64) -> f64 {
+    if mass[k] > 0.0 {
+        sums[k] / mass[k]
+    } else {
+        fallback
+    }
+}
+
 /// Smooths the hidden processes of every frame of `history` (see the module docs), and gathers
 /// the expected statistics that re-estimate their parameters ([`SwitchingStatistics`]).
 ///
@@ -90,17 +121,6 @@ pub(crate) fn smooth_hidden(
 ) -> Result<(Vec<SmoothedHidden>, SwitchingStatistics)> {
     let mut statistics = SwitchingStatistics::default();
     let frames: Vec<_> = history.frames().collect();
-    let weighted = |t: usize| {
-        let set = &frames[t].set;
-        set.states().iter().zip(set.weights().iter().copied())
-    };
-    let conditional_mean = |mass: &[f64], sums: &[f64], k: usize, fallback: f64| {
-        if mass[k] > 0.0 {
-            sums[k] / mass[k]
-        } else {
-            fallback
-        }
-    };
     let mut out = vec![
         SmoothedHidden {
             clutter: None,
@@ -110,107 +130,123 @@ pub(crate) fn smooth_hidden(
         frames.len()
     ];
     if let ClutterProcess::Switching(hmm) = &dynamics.clutter {
-        let n = hmm.n_classes();
-        let sums: Vec<_> = (0..frames.len())
-            .map(|t| class_sums(weighted(t), n, |p| p.clutter.beta, |p| p.clutter.lambda))
-            .collect();
-        let filtered: Vec<Vec<f64>> = sums.iter().map(|(m, _)| m.clone()).collect();
-        let smoothed = hmm.chain().smooth_filtered(&filtered)?;
-        let (mut occupancy, mut lambda_sums) = (vec![0.0; n], vec![0.0; n]);
-        for ((o, s), (mass, lambda)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
-            let overall = lambda.iter().sum::<f64>() / mass.iter().sum::<f64>();
-            for k in 0..n {
-                occupancy[k] += s[k];
-                lambda_sums[k] += s[k] * conditional_mean(mass, lambda, k, overall);
-            }
-            o.clutter = Some(ClutterEstimate {
-                beta_hat: argmax(s),
-                beta_probs: s.clone(),
-                lambda_hat: (0..n)
-                    .map(|k| s[k] * conditional_mean(mass, lambda, k, overall))
-                    .sum(),
-            });
-        }
-        statistics.beta = Some(ChainCounts {
-            transitions: smoothed.transitions,
-            occupancy,
-        });
-        statistics.lambda_sums = Some(lambda_sums);
+        smooth_clutter(hmm, &frames, &mut out, &mut statistics)?;
     }
     match &dynamics.occlusion {
         OcclusionModel::None => {}
-        OcclusionModel::Status(hmm) => {
-            let sums: Vec<_> = (0..frames.len())
-                .map(|t| {
-                    class_sums(
-                        weighted(t),
-                        3,
-                        |p| p.status.alpha.index(),
-                        |p| p.status.gamma,
-                    )
-                })
-                .collect();
-            let filtered: Vec<Vec<f64>> = sums.iter().map(|(m, _)| m.clone()).collect();
-            let smoothed = hmm.chain().smooth_filtered(&filtered)?;
-            statistics.alpha = Some(ChainCounts::of(&smoothed));
-            for ((o, s), (mass, gamma)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
-                let mut gamma_hat = 0.0;
-                for (k, status) in TrackStatus::ALL.into_iter().enumerate() {
-                    let r = hmm.range(status);
-                    gamma_hat += s[k] * conditional_mean(mass, gamma, k, 0.5 * (r.low + r.high));
-                }
-                o.gamma = Some(gamma_hat);
-                o.status = Some(StatusEstimate {
-                    alpha_hat: TrackStatus::from_index(argmax(s)).unwrap_or(TrackStatus::Locked),
-                    alpha_probs: [s[0], s[1], s[2]],
-                    gamma_hat,
-                });
-            }
-        }
+        OcclusionModel::Status(hmm) => smooth_status(hmm, &frames, &mut out, &mut statistics)?,
         OcclusionModel::RandomWalk(walk) => {
-            let k = GAMMA_BINS;
-            let edge = |j: usize| j as f64 / k as f64;
-            let centre = |j: usize| (j as f64 + 0.5) / k as f64;
-            let rows: Vec<Vec<f64>> = (0..k)
-                .map(|i| {
-                    let from = OcclusionState { gamma: centre(i) };
-                    let cdf = |j: usize| match j {
-                        0 => 0.0,
-                        j if j >= k => 1.0,
-                        j => walk.transition_cdf(&from, edge(j)),
-                    };
-                    (0..k).map(|j| cdf(j + 1) - cdf(j)).collect()
-                })
-                .collect();
-            let chain = MarkovChain::new(&rows)?;
-            let bin =
-                |p: &Particle| ((p.status.gamma.clamp(0.0, 1.0) * k as f64) as usize).min(k - 1);
-            let sums: Vec<_> = (0..frames.len())
-                .map(|t| class_sums(weighted(t), k, bin, |p| p.status.gamma))
-                .collect();
-            let filtered: Vec<Vec<f64>> = sums.iter().map(|(m, _)| m.clone()).collect();
-            let smoothed = chain.smooth_filtered(&filtered)?;
-            // E[(γ_{t+1} − γ_t)²] from the two-step marginals over the bins, less the variance
-            // that binning adds (two uniform errors of a bin's width).
-            let (mut squares, mut steps) = (0.0, 0.0);
-            for (i, row) in smoothed.transitions.iter().enumerate() {
-                for (j, x) in row.iter().enumerate() {
-                    squares += x * (centre(j) - centre(i)).powi(2);
-                    steps += x;
-                }
-            }
-            let binning = 2.0 / (12.0 * (k * k) as f64);
-            statistics.gamma_steps = Some(((squares - binning * steps).max(0.0), steps));
-            for ((o, s), (mass, gamma)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
-                o.gamma = Some(
-                    (0..k)
-                        .map(|j| s[j] * conditional_mean(mass, gamma, j, centre(j)))
-                        .sum(),
-                );
-            }
+            smooth_random_walk(walk, &frames, &mut out, &mut statistics)?;
         }
     }
     Ok((out, statistics))
+}
+
+/// β̂ and λ̂ of every frame from the smoothed {β, λ} HMM, with T_β's expected counts and the
+/// λ sums of λ̄_k.
+fn smooth_clutter(
+    hmm: &ClutterHmm,
+    frames: &[&Frame<Particle>],
+    out: &mut [SmoothedHidden],
+    statistics: &mut SwitchingStatistics,
+) -> Result<()> {
+    let n = hmm.n_classes();
+    let sums = frame_sums(frames, n, |p| p.clutter.beta, |p| p.clutter.lambda);
+    let smoothed = hmm.chain().smooth_filtered(&masses(&sums))?;
+    let (mut occupancy, mut lambda_sums) = (vec![0.0; n], vec![0.0; n]);
+    for ((o, s), (mass, lambda)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
+        let overall = lambda.iter().sum::<f64>() / mass.iter().sum::<f64>();
+        for k in 0..n {
+            occupancy[k] += s[k];
+            lambda_sums[k] += s[k] * conditional_mean(mass, lambda, k, overall);
+        }
+        o.clutter = Some(ClutterEstimate {
+            beta_hat: argmax(s),
+            beta_probs: s.clone(),
+            lambda_hat: (0..n)
+                .map(|k| s[k] * conditional_mean(mass, lambda, k, overall))
+                .sum(),
+        });
+    }
+    statistics.beta = Some(ChainCounts {
+        transitions: smoothed.transitions,
+        occupancy,
+    });
+    statistics.lambda_sums = Some(lambda_sums);
+    Ok(())
+}
+
+/// α̂ and γ̂ of every frame from the smoothed status HMM {α, γ}, with T_α's expected counts.
+fn smooth_status(
+    hmm: &StatusHmm,
+    frames: &[&Frame<Particle>],
+    out: &mut [SmoothedHidden],
+    statistics: &mut SwitchingStatistics,
+) -> Result<()> {
+    let sums = frame_sums(frames, 3, |p| p.status.alpha.index(), |p| p.status.gamma);
+    let smoothed = hmm.chain().smooth_filtered(&masses(&sums))?;
+    statistics.alpha = Some(ChainCounts::of(&smoothed));
+    for ((o, s), (mass, gamma)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
+        let mut gamma_hat = 0.0;
+        for (k, status) in TrackStatus::ALL.into_iter().enumerate() {
+            let r = hmm.range(status);
+            gamma_hat += s[k] * conditional_mean(mass, gamma, k, 0.5 * (r.low + r.high));
+        }
+        o.gamma = Some(gamma_hat);
+        o.status = Some(StatusEstimate {
+            alpha_hat: TrackStatus::from_index(argmax(s)).unwrap_or(TrackStatus::Locked),
+            alpha_probs: [s[0], s[1], s[2]],
+            gamma_hat,
+        });
+    }
+    Ok(())
+}
+
+/// γ̂ of every frame from the random walk smoothed as a [`GAMMA_BINS`]-bin chain, with the
+/// expected squared steps of σ_γ.
+fn smooth_random_walk(
+    walk: &OcclusionProcess,
+    frames: &[&Frame<Particle>],
+    out: &mut [SmoothedHidden],
+    statistics: &mut SwitchingStatistics,
+) -> Result<()> {
+    let k = GAMMA_BINS;
+    let edge = |j: usize| j as f64 / k as f64;
+    let centre = |j: usize| (j as f64 + 0.5) / k as f64;
+    let rows: Vec<Vec<f64>> = (0..k)
+        .map(|i| {
+            let from = OcclusionState { gamma: centre(i) };
+            let cdf = |j: usize| match j {
+                0 => 0.0,
+                j if j >= k => 1.0,
+                j => walk.transition_cdf(&from, edge(j)),
+            };
+            (0..k).map(|j| cdf(j + 1) - cdf(j)).collect()
+        })
+        .collect();
+    let chain = MarkovChain::new(&rows)?;
+    let bin = |p: &Particle| ((p.status.gamma.clamp(0.0, 1.0) * k as f64) as usize).min(k - 1);
+    let sums = frame_sums(frames, k, bin, |p| p.status.gamma);
+    let smoothed = chain.smooth_filtered(&masses(&sums))?;
+    // E[(γ_{t+1} − γ_t)²] from the two-step marginals over the bins, less the variance that
+    // binning adds (two uniform errors of a bin's width).
+    let (mut squares, mut steps) = (0.0, 0.0);
+    for (i, row) in smoothed.transitions.iter().enumerate() {
+        for (j, x) in row.iter().enumerate() {
+            squares += x * (centre(j) - centre(i)).powi(2);
+            steps += x;
+        }
+    }
+    let binning = 2.0 / (12.0 * (k * k) as f64);
+    statistics.gamma_steps = Some(((squares - binning * steps).max(0.0), steps));
+    for ((o, s), (mass, gamma)) in out.iter_mut().zip(&smoothed.marginals).zip(&sums) {
+        o.gamma = Some(
+            (0..k)
+                .map(|j| s[j] * conditional_mean(mass, gamma, j, centre(j)))
+                .sum(),
+        );
+    }
+    Ok(())
 }
 
 /// Expected counts of one chain over a smoothed run.

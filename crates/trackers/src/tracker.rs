@@ -250,6 +250,76 @@ impl ParticleTracker {
 
     /// Clusters the (resampled) particles and estimates each cluster's motion from the previous
     /// frame to the current one (Odobez §5).
+    /// Propagates `set` to this frame with the configured proposal and weights it (Odobez Eq. 3)
+    /// by the frame's observation terms; sets the prior's reacquisition component and shape
+    /// anchor for the frame first.
+    fn weigh_frame(
+        &mut self,
+        frame: &Frame<'_>,
+        set: &mut ParticleSet<Particle>,
+        seed: u64,
+        step: u64,
+    ) -> Result<smc_core::WeightReport> {
+        self.dynamics.reacquisition = self.reacquisition_component(self.frame + 1);
+        // The mean shape of the shape-space dynamics: the shape remembered over the locked
+        // estimates (see `DynamicsSettings::shape_reversion`).
+        self.dynamics.shape_anchor =
+            (self.config.dynamics.shape_reversion > 0.0).then(|| *self.memory.state());
+        let current = frame.grey();
+        let previous = GreyImage::new(self.size.0, self.size.1, &self.previous)?;
+        self.likelihood
+            .reference_counts(&current, &self.last_state, &mut self.reference)?;
+        let observation = FrameObservation {
+            model: &self.likelihood,
+            current,
+            previous,
+            clusters: &self.clusters,
+            reference: &self.reference,
+        };
+        let filter = &mut self.filter;
+        let weighted = match self.config.proposal {
+            ProposalKind::Prior if self.config.dynamics.hidden_exploration > 0.0 => {
+                let proposal = ExploringPrior(&self.dynamics);
+                let prior = Some(&self.dynamics);
+                propagate_and_weight(filter, set, &proposal, prior, &observation, seed, step)
+            }
+            ProposalKind::Prior => {
+                let proposal = Bootstrap(&self.dynamics);
+                propagate_and_weight(filter, set, &proposal, None, &observation, seed, step)
+            }
+            ProposalKind::Motion => {
+                let proposal = MotionProposal {
+                    dynamics: &self.dynamics,
+                    clusters: &self.clusters,
+                    occlusion_aware: self.config.motion.occlusion_aware,
+                };
+                let prior = Some(&self.dynamics);
+                propagate_and_weight(filter, set, &proposal, prior, &observation, seed, step)
+            }
+        };
+        Ok(weighted?)
+    }
+
+    /// Records a locked estimate in the track memory of the reacquisition jump, keeping the last
+    /// `rollback + 1` memories.
+    fn remember_if_locked(
+        &mut self,
+        state: &StateVector,
+        gamma: Option<f64>,
+        status: Option<&StatusEstimate>,
+    ) {
+        if self.is_locked(state, gamma, status)
+            && let Some(settings) = &self.config.reacquisition
+        {
+            self.memory
+                .observe(self.config.space, settings, state, self.frame);
+            self.history.push_back(self.memory.clone());
+            while self.history.len() > settings.rollback + 1 {
+                self.history.pop_front();
+            }
+        }
+    }
+
     fn estimate_cluster_motions(&mut self, frame: &Frame<'_>) -> Result<(usize, usize)> {
         let Some(set) = self.set.as_mut() else {
             return Err(Error::NotInitialised);
@@ -578,48 +648,11 @@ impl Tracker for ParticleTracker {
         let Some(mut set) = self.set.take() else {
             return Err(Error::NotInitialised);
         };
-        self.dynamics.reacquisition = self.reacquisition_component(self.frame + 1);
-        // The mean shape of the shape-space dynamics: the shape remembered over the locked
-        // estimates (see `DynamicsSettings::shape_reversion`).
-        self.dynamics.shape_anchor =
-            (self.config.dynamics.shape_reversion > 0.0).then(|| *self.memory.state());
-        let current = frame.grey();
-        let previous = GreyImage::new(self.size.0, self.size.1, &self.previous)?;
-        self.likelihood
-            .reference_counts(&current, &self.last_state, &mut self.reference)?;
-        let observation = FrameObservation {
-            model: &self.likelihood,
-            current,
-            previous,
-            clusters: &self.clusters,
-            reference: &self.reference,
-        };
-        let filter = &mut self.filter;
-        let weighted = match self.config.proposal {
-            ProposalKind::Prior if self.config.dynamics.hidden_exploration > 0.0 => {
-                let proposal = ExploringPrior(&self.dynamics);
-                let prior = Some(&self.dynamics);
-                propagate_and_weight(filter, &mut set, &proposal, prior, &observation, seed, step)
-            }
-            ProposalKind::Prior => {
-                let proposal = Bootstrap(&self.dynamics);
-                propagate_and_weight(filter, &mut set, &proposal, None, &observation, seed, step)
-            }
-            ProposalKind::Motion => {
-                let proposal = MotionProposal {
-                    dynamics: &self.dynamics,
-                    clusters: &self.clusters,
-                    occlusion_aware: self.config.motion.occlusion_aware,
-                };
-                let prior = Some(&self.dynamics);
-                propagate_and_weight(filter, &mut set, &proposal, prior, &observation, seed, step)
-            }
-        };
-        let weighted = match weighted {
+        let weighted = match self.weigh_frame(&frame, &mut set, seed, step) {
             Ok(w) => w,
             Err(e) => {
                 self.set = Some(set);
-                return Err(e.into());
+                return Err(e);
             }
         };
         let visibility = self.visibility.as_mut().and_then(|v| {
@@ -637,16 +670,7 @@ impl Tracker for ParticleTracker {
         } = estimated?;
         self.frame += 1;
         self.last_state = state;
-        if self.is_locked(&state, gamma, status.as_ref())
-            && let Some(settings) = &self.config.reacquisition
-        {
-            self.memory
-                .observe(self.config.space, settings, &state, self.frame);
-            self.history.push_back(self.memory.clone());
-            while self.history.len() > settings.rollback + 1 {
-                self.history.pop_front();
-            }
-        }
+        self.remember_if_locked(&state, gamma, status.as_ref());
         self.previous.clear();
         self.previous.extend_from_slice(frame.data());
         let mut report = self.report(state, 0.0)?;
