@@ -27,7 +27,33 @@ fn region(size: usize) -> Region<'static> {
     }
 }
 
-fn bench(c: &mut Criterion) {
+/// Both frames' pyramids of the 0.03-noise pair, built once.
+fn shared_pyramids(est: &MotionEstimator) -> (Pyramid, Pyramid) {
+    let (f0, f1) = pair(0.03);
+    let v0 = GreyImage::new(W, H, &f0).unwrap();
+    let v1 = GreyImage::new(W, H, &f1).unwrap();
+    let (mut p0, mut p1) = (Pyramid::new(), Pyramid::new());
+    est.build_pyramid_into(v0, &mut p0).unwrap();
+    est.build_pyramid_into(v1, &mut p1).unwrap();
+    (p0, p1)
+}
+
+fn bench_pyramid(c: &mut Criterion) {
+    let (f0, _) = pair(0.03);
+    let v0 = GreyImage::new(W, H, &f0).unwrap();
+    let est = MotionEstimator::new(Settings::default()).unwrap();
+
+    let mut g = c.benchmark_group("pyramid");
+    g.throughput(Throughput::Elements((W * H) as u64));
+    let mut pyr = Pyramid::new();
+    g.bench_function(BenchmarkId::new("build", "320x240"), |b| {
+        b.iter(|| est.build_pyramid_into(black_box(v0), &mut pyr).unwrap())
+    });
+    g.finish();
+}
+
+/// One estimate including both frames' pyramids over the region's box plus margin.
+fn bench_estimate_with_pyramids(c: &mut Criterion) {
     let (f0, f1) = pair(0.03);
     let (t0, t1) = pair(0.0);
     let v0 = GreyImage::new(W, H, &f0).unwrap();
@@ -38,15 +64,6 @@ fn bench(c: &mut Criterion) {
     );
     let est = MotionEstimator::new(Settings::default()).unwrap();
 
-    let mut g = c.benchmark_group("pyramid");
-    g.throughput(Throughput::Elements((W * H) as u64));
-    let mut pyr = Pyramid::new();
-    g.bench_function(BenchmarkId::new("build", "320x240"), |b| {
-        b.iter(|| est.build_pyramid_into(black_box(v0), &mut pyr).unwrap())
-    });
-    g.finish();
-
-    // One estimate including both frames' pyramids over the region's box plus margin.
     let mut g = c.benchmark_group("estimate_with_pyramids");
     let mut bufs = FrameBuffers::default();
     for model in [
@@ -84,12 +101,13 @@ fn bench(c: &mut Criterion) {
         }
     }
     g.finish();
+}
 
-    // Many regions per frame pair: pyramids built once, estimate only.
+/// Many regions per frame pair: pyramids built once, estimate only.
+fn bench_estimate_shared_pyramids(c: &mut Criterion) {
+    let est = MotionEstimator::new(Settings::default()).unwrap();
+    let (p0, p1) = shared_pyramids(&est);
     let mut g = c.benchmark_group("estimate_shared_pyramids");
-    let (mut p0, mut p1) = (Pyramid::new(), Pyramid::new());
-    est.build_pyramid_into(v0, &mut p0).unwrap();
-    est.build_pyramid_into(v1, &mut p1).unwrap();
     let mut ws = Workspace::new();
     for size in [32usize, 64, 128] {
         let r = region(size);
@@ -109,8 +127,13 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.finish();
+}
 
-    // The tracker's use (`pair::tracking_ellipse`) on shared full-frame pyramids, affine.
+/// The tracker's use (`pair::tracking_ellipse`) on shared full-frame pyramids, affine.
+fn bench_tracking_ellipse(c: &mut Criterion) {
+    let est = MotionEstimator::new(Settings::default()).unwrap();
+    let (p0, p1) = shared_pyramids(&est);
+    let mut ws = Workspace::new();
     let mut g = c.benchmark_group("tracking_ellipse_22x28");
     let ell = tracking_ellipse();
     g.throughput(Throughput::Elements(1935));
@@ -160,5 +183,11 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+criterion_group!(
+    benches,
+    bench_pyramid,
+    bench_estimate_with_pyramids,
+    bench_estimate_shared_pyramids,
+    bench_tracking_ellipse
+);
 criterion_main!(benches);

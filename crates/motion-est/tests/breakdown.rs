@@ -184,103 +184,158 @@ impl Tally {
     }
 }
 
+/// What every run over one scene shares: the region's centre (the warp's origin), the
+/// background's warp, the region and its corners.
+struct Geometry {
+    centre: [f64; 2],
+    warp: Affine,
+    region: Region<'static>,
+    corners: [f64; 4],
+}
+
+impl Geometry {
+    fn of(scene: &Scene) -> Self {
+        let [rx, ry, rw, rh] = scene.region;
+        let centre = [
+            rx as f64 + (rw as f64 - 1.0) / 2.0,
+            ry as f64 + (rh as f64 - 1.0) / 2.0,
+        ];
+        let warp = Affine::issue(centre);
+        let region = if rw == scene.w && rh == scene.h {
+            Region::Full
+        } else {
+            Region::Rect {
+                x: rx as f64,
+                y: ry as f64,
+                width: rw as f64,
+                height: rh as f64,
+            }
+        };
+        let corners = [
+            rx as f64,
+            ry as f64,
+            (rx + rw - 1) as f64,
+            (ry + rh - 1) as f64,
+        ];
+        Self {
+            centre,
+            warp,
+            region,
+            corners,
+        }
+    }
+}
+
+/// The top-left corner of a block of `side` at `place` in the scene's region.
+fn block_origin(scene: &Scene, place: Place, side: usize) -> [f64; 2] {
+    let [rx, ry, rw, rh] = scene.region;
+    let (dx, dy) = match place {
+        Place::Corner => (0, 0),
+        Place::Edge => (0, (rh - side) / 2),
+        Place::Centre => ((rw - side) / 2, (rh - side) / 2),
+    };
+    [(rx + dx) as f64, (ry + dy) as f64]
+}
+
+/// One block of texture `btex` at `xy` moving by `shift` over the warped background `b`, with
+/// noise from `nseed`: the estimate over the region, and its mean corner errors against the
+/// background's warp and against the block's shift.
+#[allow(clippy::too_many_arguments)]
+fn estimate_block(
+    scene: &Scene,
+    g: &Geometry,
+    est: &MotionEstimator,
+    b: (&[f64], &[f64]),
+    btex: &Texture,
+    xy: [f64; 2],
+    side: usize,
+    shift: [f64; 2],
+    nseed: u64,
+) -> (MotionEstimate, f64, f64) {
+    let (mut c0, mut c1) = (b.0.to_vec(), b.1.to_vec());
+    draw_block((&mut c0, &mut c1), scene.w, scene.h, btex, xy, side, shift);
+    let f0 = noisy(&c0, nseed);
+    let f1 = noisy(&c1, nseed + 1);
+    let r = est
+        .estimate_images(
+            GreyImage::new(scene.w, scene.h, &f0).unwrap(),
+            GreyImage::new(scene.w, scene.h, &f1).unwrap(),
+            &g.region,
+            ModelSpec::new(MotionModel::Affine, false),
+            Some(g.centre),
+        )
+        .unwrap();
+    let e = mean_corner_error(&r, &g.warp, g.corners);
+    let eb = mean_corner_error(
+        &r,
+        &Affine {
+            a: [shift[0], 0.0, 0.0, shift[1], 0.0, 0.0],
+            origin: g.centre,
+        },
+        g.corners,
+    );
+    (r, e, eb)
+}
+
+impl Tally {
+    /// Counts one run of error `e` against the background's warp and `eb` against the block's
+    /// shift; `case` names it in the report of a silent failure.
+    fn count(&mut self, r: &MotionEstimate, e: f64, eb: f64, flagged: bool, case: &str) {
+        self.runs += 1;
+        if !flagged && e > FAIL && eb > FAIL {
+            self.silent_any += 1;
+        }
+        if e > FAIL {
+            self.wrong += 1;
+            if !flagged {
+                self.silent += 1;
+                eprintln!(
+                    "  silent failure: {case}: \
+                     error {e:.3} px, scale {:.2}, inliers {:.2}, iterations {:?}",
+                    r.scale, r.inlier_fraction, r.iterations
+                );
+            }
+        }
+        if flagged {
+            self.flagged += 1;
+        } else {
+            self.worst_unflagged = self.worst_unflagged.max(e);
+            if e <= FAIL {
+                self.ok += 1;
+                self.ok_error += e;
+            }
+        }
+    }
+}
+
 /// Runs the grid for one block side: 3 places × 4 motions × 2 textures × `draws`.
 fn grid(scene: &Scene, side: usize, est: &MotionEstimator, seed: u64, draws: u64) -> Tally {
-    let [rx, ry, rw, rh] = scene.region;
-    let centre = [
-        rx as f64 + (rw as f64 - 1.0) / 2.0,
-        ry as f64 + (rh as f64 - 1.0) / 2.0,
-    ];
-    let warp = Affine::issue(centre);
-    let region = if rw == scene.w && rh == scene.h {
-        Region::Full
-    } else {
-        Region::Rect {
-            x: rx as f64,
-            y: ry as f64,
-            width: rw as f64,
-            height: rh as f64,
-        }
-    };
-    let corners = [
-        rx as f64,
-        ry as f64,
-        (rx + rw - 1) as f64,
-        (ry + rh - 1) as f64,
-    ];
-    let spec = ModelSpec::new(MotionModel::Affine, false);
+    let g = Geometry::of(scene);
     let mut tally = Tally::default();
     for d in 0..draws {
         let tseed = seed + 100 * d;
         let tex = Texture::new(tseed, COMPONENTS, TEXTURE_STD);
         let other = Texture::new(tseed + 1, COMPONENTS, TEXTURE_STD);
-        let (b0, b1) = background(&tex, &warp, scene.w, scene.h);
+        let (b0, b1) = background(&tex, &g.warp, scene.w, scene.h);
         for place in [Place::Corner, Place::Edge, Place::Centre] {
-            let (dx, dy) = match place {
-                Place::Corner => (0, 0),
-                Place::Edge => (0, (rh - side) / 2),
-                Place::Centre => ((rw - side) / 2, (rh - side) / 2),
-            };
-            let xy = [(rx + dx) as f64, (ry + dy) as f64];
+            let xy = block_origin(scene, place, side);
             for (m, rel) in RELATIVE.iter().enumerate() {
                 for same in [false, true] {
-                    let (mut c0, mut c1) = (b0.clone(), b1.clone());
                     let shift = [T[0] + rel[0], T[1] + rel[1]];
                     let btex = if same { &tex } else { &other };
-                    draw_block((&mut c0, &mut c1), scene.w, scene.h, btex, xy, side, shift);
                     let nseed = 1_000_000 * seed + 10_000 * d + 100 * m as u64 + 10 * same as u64;
-                    let f0 = noisy(&c0, nseed);
-                    let f1 = noisy(&c1, nseed + 1);
-                    let r = est
-                        .estimate_images(
-                            GreyImage::new(scene.w, scene.h, &f0).unwrap(),
-                            GreyImage::new(scene.w, scene.h, &f1).unwrap(),
-                            &region,
-                            spec,
-                            Some(centre),
-                        )
-                        .unwrap();
-                    let e = mean_corner_error(&r, &warp, corners);
-                    let eb = mean_corner_error(
-                        &r,
-                        &Affine {
-                            a: [shift[0], 0.0, 0.0, shift[1], 0.0, 0.0],
-                            origin: centre,
-                        },
-                        corners,
-                    );
+                    let (r, e, eb) =
+                        estimate_block(scene, &g, est, (&b0, &b1), btex, xy, side, shift, nseed);
                     let flagged = flagged(&r);
+                    let case = format!("side {side} {place:?} rel {rel:?} same {same} draw {d}");
                     if std::env::var_os("BREAKDOWN_VERBOSE").is_some() && (e > FAIL || flagged) {
                         eprintln!(
-                            "  side {side} {place:?} rel {rel:?} same {same} draw {d}: e {e:.3} eb {eb:.3} \
+                            "  {case}: e {e:.3} eb {eb:.3} \
                              reliable {} conv {} scale {:.2} inl {:.2} it {:?}",
                             r.reliable, r.converged, r.scale, r.inlier_fraction, r.iterations
                         );
                     }
-                    tally.runs += 1;
-                    if !flagged && e > FAIL && eb > FAIL {
-                        tally.silent_any += 1;
-                    }
-                    if e > FAIL {
-                        tally.wrong += 1;
-                        if !flagged {
-                            tally.silent += 1;
-                            eprintln!(
-                                "  silent failure: side {side} {place:?} rel {rel:?} same {same} draw {d}: \
-                                 error {e:.3} px, scale {:.2}, inliers {:.2}, iterations {:?}",
-                                r.scale, r.inlier_fraction, r.iterations
-                            );
-                        }
-                    }
-                    if flagged {
-                        tally.flagged += 1;
-                    } else {
-                        tally.worst_unflagged = tally.worst_unflagged.max(e);
-                        if e <= FAIL {
-                            tally.ok += 1;
-                            tally.ok_error += e;
-                        }
-                    }
+                    tally.count(&r, e, eb, flagged, &case);
                 }
             }
         }

@@ -136,7 +136,7 @@ fn small_history() -> History<f64> {
 }
 
 #[test]
-fn bad_input_gives_typed_errors() {
+fn an_empty_history_is_an_error() {
     let s = SmootherSettings::default();
     let empty = History::<f64>::new(HistorySettings::default()).unwrap();
     assert_eq!(smooth_marginals(&empty, &AR1, &s), Err(Error::EmptyHistory));
@@ -148,7 +148,11 @@ fn bad_input_gives_typed_errors() {
         fixed_lag_weights(&empty, &AR1, 2, &s),
         Err(Error::EmptyHistory)
     );
+}
 
+#[test]
+fn degenerate_transition_densities_are_errors() {
+    let s = SmootherSettings::default();
     let h = small_history();
     let neg = Constant(f64::NEG_INFINITY, None);
     for result in [
@@ -188,6 +192,12 @@ fn bad_input_gives_typed_errors() {
         sample_trajectories(&h, &above, 5, 0, &s),
         Err(Error::BoundExceeded { frame: 1, .. })
     ));
+}
+
+#[test]
+fn invalid_smoother_settings_are_errors() {
+    let s = SmootherSettings::default();
+    let h = small_history();
     let rejection = SmootherSettings {
         backward: BackwardMethod::Rejection,
         ..SmootherSettings::default()
@@ -225,7 +235,12 @@ fn bad_input_gives_typed_errors() {
             Err(Error::InvalidSetting { .. })
         ));
     }
-    // Results read against another history.
+}
+
+#[test]
+fn results_read_against_another_history_are_errors() {
+    let s = SmootherSettings::default();
+    let h = small_history();
     let m = smooth_marginals(&h, &AR1, &s).unwrap();
     let mut other = History::new(HistorySettings::default()).unwrap();
     other
@@ -239,7 +254,11 @@ fn bad_input_gives_typed_errors() {
         m.to_particle_set(&h, 2),
         Err(Error::InvalidSetting { .. })
     ));
-    // A single frame is its own smoother.
+}
+
+#[test]
+fn a_single_frame_is_its_own_smoother() {
+    let s = SmootherSettings::default();
     let mut one = History::new(HistorySettings::default()).unwrap();
     let set = ParticleSet::from_log_weights(vec![0.0, 1.0], vec![0.0, 1.0]).unwrap();
     one.push(0, set.clone(), None).unwrap();

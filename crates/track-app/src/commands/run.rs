@@ -518,16 +518,7 @@ fn write_outputs(
             )
         }));
     }
-    if let Some(AppError::Interrupted { frames, .. }) = &mut stop {
-        *frames = records.len();
-    }
-    let interrupted = stop.as_ref().map(|e| Interruption {
-        reason: match e {
-            AppError::Interrupted { signal, .. } => (*signal).to_owned(),
-            other => other.to_string(),
-        },
-        frames_read,
-    });
+    let interrupted = interruption(&mut stop, records.len(), frames_read);
     let Kept {
         gif,
         strip,
@@ -535,17 +526,85 @@ fn write_outputs(
         mut written,
     } = kept;
 
+    write_tables(
+        args,
+        config,
+        start,
+        &records,
+        smoothed.as_deref(),
+        &mut written,
+    )?;
+    let figures =
+        write_animation_and_plots(args, &records, smoothed.as_deref(), gif, &mut written)?;
+    let metrics = match &input.truth {
+        Some(t) => Some(score(start, &records, t, output.seconds)?),
+        None => None,
+    };
+    if args.report {
+        written.push("report.html".into());
+    }
+    written.push("summary.json".into());
+    let summary = run_summary(
+        input,
+        &records,
+        output.seconds,
+        metrics,
+        written,
+        interrupted,
+    );
+    if args.report {
+        write_run_report(args, input, &summary, figures, strip, strip_known.is_some())?;
+    }
+    write_summary(&args.out.join("summary.json"), &summary)?;
+    if let Some(e) = stop {
+        return Err(e);
+    }
+    if !args.quiet {
+        print_summary(&summary, &args.out)?;
+    }
+    Ok(())
+}
+
+/// What stopped the run early, for the summary; an interruption by a signal is given the number
+/// of frames tracked.
+fn interruption(
+    stop: &mut Option<AppError>,
+    tracked_frames: usize,
+    frames_read: usize,
+) -> Option<Interruption> {
+    if let Some(AppError::Interrupted { frames, .. }) = stop {
+        *frames = tracked_frames;
+    }
+    stop.as_ref().map(|e| Interruption {
+        reason: match e {
+            AppError::Interrupted { signal, .. } => (*signal).to_owned(),
+            other => other.to_string(),
+        },
+        frames_read,
+    })
+}
+
+/// Writes `track.csv` and `boxes.txt`, and their smoothed versions when there are smoothed
+/// records, adding them to `written`.
+fn write_tables(
+    args: &Args,
+    config: &TrackerConfig,
+    start: usize,
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+    written: &mut Vec<String>,
+) -> Result<()> {
     write_csv_with(
         &args.out.join("track.csv"),
-        &records,
+        records,
         CsvColumns::of_tracker(config),
     )?;
     write_atomic(
         &args.out.join("boxes.txt"),
-        boxes_with_gap(start, &records).as_bytes(),
+        boxes_with_gap(start, records).as_bytes(),
     )?;
     written.extend(["track.csv".to_owned(), "boxes.txt".to_owned()]);
-    if let Some(smoothed) = &smoothed {
+    if let Some(smoothed) = smoothed {
         write_csv_with(
             &args.out.join("smoothed.csv"),
             smoothed,
@@ -557,17 +616,20 @@ fn write_outputs(
         )?;
         written.extend(["smoothed.csv".to_owned(), "smoothed_boxes.txt".to_owned()]);
     }
-    let figures =
-        write_animation_and_plots(args, &records, smoothed.as_deref(), gif, &mut written)?;
-    let metrics = match &input.truth {
-        Some(t) => Some(score(start, &records, t, output.seconds)?),
-        None => None,
-    };
-    if args.report {
-        written.push("report.html".into());
-    }
-    written.push("summary.json".into());
-    let summary = Summary {
+    Ok(())
+}
+
+/// The run's `summary.json`.
+fn run_summary(
+    input: &CheckedInput,
+    records: &[FrameRecord],
+    seconds: f64,
+    metrics: Option<SequenceMetrics>,
+    outputs: Vec<String>,
+    interrupted: Option<Interruption>,
+) -> Summary {
+    let config = &input.config;
+    Summary {
         tool_version: env!("CARGO_PKG_VERSION").to_owned(),
         sequence: input.name.clone(),
         tracker: config.name.clone(),
@@ -578,35 +640,37 @@ fn write_outputs(
         height: input.height,
         frame_rate: input.frame_rate,
         initial_box: Some(input.init.bounding_box()),
-        seconds: output.seconds,
-        fps: records.len() as f64 / output.seconds.max(1e-9),
-        mean_millis: 1e3 * output.seconds / records.len().max(1) as f64,
-        status_counts: status_counts(&records),
+        seconds,
+        fps: records.len() as f64 / seconds.max(1e-9),
+        mean_millis: 1e3 * seconds / records.len().max(1) as f64,
+        status_counts: status_counts(records),
         metrics,
-        outputs: written,
+        outputs,
         interrupted,
+    }
+}
+
+/// Writes `report.html`: the summary's figures, the plots and the strip of overlays.
+fn write_run_report(
+    args: &Args,
+    input: &CheckedInput,
+    summary: &Summary,
+    figures: Vec<crate::plots::Figure>,
+    strip: Thinned<(String, RgbImage)>,
+    strip_picked_in_advance: bool,
+) -> Result<()> {
+    let config = &input.config;
+    let report = ReportInput {
+        title: format!("{} — {}", input.name, config.name),
+        subtitle: format!(
+            "track run {} --tracker {} --particles {} --seed {}",
+            args.sequence, config.name, config.particles, config.seed
+        ),
+        metrics: summary_rows(summary),
+        figures,
+        strip: strip_frames(strip, strip_picked_in_advance),
     };
-    if args.report {
-        let report = ReportInput {
-            title: format!("{} — {}", input.name, config.name),
-            subtitle: format!(
-                "track run {} --tracker {} --particles {} --seed {}",
-                args.sequence, config.name, config.particles, config.seed
-            ),
-            metrics: summary_rows(&summary),
-            figures,
-            strip: strip_frames(strip, strip_known.is_some()),
-        };
-        write_report(&args.out.join("report.html"), &report)?;
-    }
-    write_summary(&args.out.join("summary.json"), &summary)?;
-    if let Some(e) = stop {
-        return Err(e);
-    }
-    if !args.quiet {
-        print_summary(&summary, &args.out)?;
-    }
-    Ok(())
+    write_report(&args.out.join("report.html"), &report)
 }
 
 /// Writes `track.gif` and `plots/*.svg` when asked for, adding them to `written`; returns the

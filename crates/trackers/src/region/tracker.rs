@@ -362,7 +362,39 @@ impl Tracker for RegionTracker {
 }
 
 impl RegionTracker {
+    /// One frame: prediction, weighting, the estimate, the lost/locked chain and the model
+    /// updates, then resampling.
     fn step(&mut self, track: &mut Track, frame: &Frame<'_>, start: Instant) -> Result<Estimate> {
+        self.check_frame_size(track, frame)?;
+        self.frame += 1;
+        let t = self.frame as u64;
+        let current = track.estimate.ellipse(track.base);
+        self.predict(track, frame, &current, t);
+        let ess = self.weigh(track, &current, t)?;
+        let (mean, e) = self.mean_estimate(track)?;
+        self.update_status_and_models(track, &mean, &e)?;
+        track.estimate = mean;
+        self.resample(track, t)?;
+
+        let status = track.chain.estimate();
+        let reported = track.calibration.reported(&e);
+        Ok(Estimate {
+            frame: self.frame,
+            ellipse: reported,
+            bbox: bbox(&reported),
+            state: [0.0; STATE_SLOTS],
+            ess,
+            diagnostics: None,
+            clutter: None,
+            gamma: Some(status.gamma_hat),
+            status: Some(status),
+            motion_clusters: (0, 0),
+            millis: start.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+
+    /// An error unless `frame` has the size of the track's first frame.
+    fn check_frame_size(&self, track: &Track, frame: &Frame<'_>) -> Result<()> {
         if (frame.width(), frame.height()) != track.size {
             return Err(Error::BadFrame {
                 frame: self.frame + 1,
@@ -375,22 +407,21 @@ impl RegionTracker {
                 ),
             });
         }
-        self.frame += 1;
-        let t = self.frame as u64;
+        Ok(())
+    }
+
+    /// Reads the window around the drifted estimate (the whole frame while the target is
+    /// believed lost), integrates its log-ratios and returns the best centre of the `current`
+    /// ellipse in it, where the detection jumps land.
+    fn read_and_detect(
+        &mut self,
+        track: &Track,
+        frame: &Frame<'_>,
+        current: &Ellipse,
+        drift: [f64; 2],
+    ) -> Option<[f64; 2]> {
         let s = self.settings;
-        let seed = self.config.seed;
         let p_lost = track.chain.p_lost();
-        let current = track.estimate.ellipse(track.base);
-        let sigma = s.sigma_position * (current.a * current.b).sqrt();
-        let (fw, fh) = (frame.width() as f64, frame.height() as f64);
-        let drift = [
-            s.velocity_retention * track.velocity[0],
-            s.velocity_retention * track.velocity[1],
-        ];
-        // Prediction: a random walk around the drifted state, a share of long jumps, and while
-        // the target is believed lost a share of draws anywhere in the frame.
-        // The window and its log-ratio integral image, read before the prediction: the best
-        // centre of the current ellipse in it is where the detection jumps land.
         let bins = track.bins;
         let centre = [current.cx + drift[0], current.cy + drift[1]];
         self.read_window(frame, &bins, centre, (current.a, current.b), p_lost > 0.5);
@@ -401,10 +432,25 @@ impl RegionTracker {
         let cells = (x1 - x0) * (y1 - y0) / (self.window.step() * self.window.step());
         let stride = (DETECTION_STRIDE * (current.a * current.b).sqrt() / self.window.step())
             .max((cells / MAX_DETECTION_CENTRES).sqrt());
-        let detection = self
-            .window
+        self.window
             .best_centre((current.a, current.b), s.contrast_ring, stride)
-            .map(|(c, _)| c);
+            .map(|(c, _)| c)
+    }
+
+    /// Prediction: a random walk around the drifted state, a share of long jumps, and (more
+    /// often while the target is believed lost) a share of draws around the detection.
+    fn predict(&mut self, track: &mut Track, frame: &Frame<'_>, current: &Ellipse, t: u64) {
+        let s = self.settings;
+        let seed = self.config.seed;
+        let p_lost = track.chain.p_lost();
+        let sigma = s.sigma_position * (current.a * current.b).sqrt();
+        let (fw, fh) = (frame.width() as f64, frame.height() as f64);
+        let drift = [
+            s.velocity_retention * track.velocity[0],
+            s.velocity_retention * track.velocity[1],
+        ];
+        // The window and its log-ratio integral image are read before the prediction.
+        let detection = self.read_and_detect(track, frame, current, drift);
         let detect_share = s.detection_share.max(s.reacquire_share * p_lost);
         track.scratch.clear();
         for (i, p) in track.particles.iter().enumerate() {
@@ -435,8 +481,12 @@ impl RegionTracker {
             track.scratch.push(q);
         }
         std::mem::swap(&mut track.particles, &mut track.scratch);
+    }
 
-        // Weights.
+    /// Weights: contrast across each hypothesis' contour, and its template and edge terms when
+    /// enabled, tempered to keep the effective sample size. Returns that sample size.
+    fn weigh(&mut self, track: &mut Track, current: &Ellipse, t: u64) -> Result<f64> {
+        let s = self.settings;
         self.reference.clear();
         self.reference.extend(
             track
@@ -450,7 +500,7 @@ impl RegionTracker {
         self.samples.resize(self.grid.len(), 0.0);
         let ncc = motion_est::NccSettings::default();
         self.log_weights.clear();
-        let reference = self.window.area(&current);
+        let reference = self.window.area(current);
         for p in &track.particles {
             let e = p.ellipse(track.base);
             let mut lw = s.colour_weight * self.window.contrast(&e, s.contrast_ring, reference);
@@ -472,9 +522,11 @@ impl RegionTracker {
             s.min_ess_fraction * n as f64,
             t,
         )?;
-        let ess = effective_sample_size(&track.weights);
+        Ok(effective_sample_size(&track.weights))
+    }
 
-        // The estimate: the weighted mean hypothesis.
+    /// The estimate: the weighted mean hypothesis and its ellipse, an error when not finite.
+    fn mean_estimate(&self, track: &Track) -> Result<(Hypothesis, Ellipse)> {
         let mut mean = Hypothesis::default();
         for (p, &w) in track.particles.iter().zip(&track.weights) {
             mean.cx += w * p.cx;
@@ -489,9 +541,18 @@ impl RegionTracker {
                 reason: "the estimated contour is not finite".into(),
             });
         }
+        Ok((mean, e))
+    }
 
-        // Status from the estimate's colour; model updates from locked frames only.
-        let (inside, ring) = self.histograms(bins.len(), &e);
+    /// Status from the estimate's colour; model updates from locked frames only.
+    fn update_status_and_models(
+        &mut self,
+        track: &mut Track,
+        mean: &Hypothesis,
+        e: &Ellipse,
+    ) -> Result<()> {
+        let s = self.settings;
+        let (inside, ring) = self.histograms(track.bins.len(), e);
         let similarity = inside
             .as_ref()
             .map_or(0.0, |h| h.bhattacharyya(&track.initial));
@@ -508,21 +569,31 @@ impl RegionTracker {
             }
             track.velocity = [mean.cx - track.estimate.cx, mean.cy - track.estimate.cy];
             if s.template_rate > 0.0 {
-                self.window.patch(&e, &self.grid, &mut self.samples)?;
-                let rate = (s.template_rate * (1.0 - 2.0 * p_lost)) as f32;
-                for (t, v) in track.template.iter_mut().zip(&self.samples) {
-                    if v.is_finite() {
-                        *t = (1.0 - rate) * *t + rate * v;
-                    }
-                }
+                self.update_template(track, e, p_lost)?;
             }
         } else {
             track.velocity = [0.0; 2];
         }
-        track.estimate = mean;
+        Ok(())
+    }
 
-        // Resampling (every frame, systematic).
-        let mut rng = resampler_rng(seed, t);
+    /// Blends the grey samples inside `e` into the learnt template, at a rate that falls to
+    /// nothing as the target's probability of being lost reaches one half.
+    fn update_template(&mut self, track: &mut Track, e: &Ellipse, p_lost: f64) -> Result<()> {
+        self.window.patch(e, &self.grid, &mut self.samples)?;
+        let rate = (self.settings.template_rate * (1.0 - 2.0 * p_lost)) as f32;
+        for (t, v) in track.template.iter_mut().zip(&self.samples) {
+            if v.is_finite() {
+                *t = (1.0 - rate) * *t + rate * v;
+            }
+        }
+        Ok(())
+    }
+
+    /// Resampling (every frame, systematic), leaving equal weights.
+    fn resample(&mut self, track: &mut Track, t: u64) -> Result<()> {
+        let n = track.particles.len();
+        let mut rng = resampler_rng(self.config.seed, t);
         Systematic.resample(&track.weights, n, &mut rng, &mut self.ancestors)?;
         track.scratch.clear();
         track
@@ -530,21 +601,6 @@ impl RegionTracker {
             .extend(self.ancestors.iter().map(|&i| track.particles[i]));
         std::mem::swap(&mut track.particles, &mut track.scratch);
         track.weights.fill(1.0 / n as f64);
-
-        let status = track.chain.estimate();
-        let reported = track.calibration.reported(&e);
-        Ok(Estimate {
-            frame: self.frame,
-            ellipse: reported,
-            bbox: bbox(&reported),
-            state: [0.0; STATE_SLOTS],
-            ess,
-            diagnostics: None,
-            clutter: None,
-            gamma: Some(status.gamma_hat),
-            status: Some(status),
-            motion_clusters: (0, 0),
-            millis: start.elapsed().as_secs_f64() * 1e3,
-        })
+        Ok(())
     }
 }
