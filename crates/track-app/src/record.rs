@@ -279,6 +279,24 @@ pub fn write_boxes(path: &Path, records: &[FrameRecord]) -> Result<()> {
     write_atomic(path, boxes_string(records)?.as_bytes())
 }
 
+/// Writes a run's two tables into `dir`, each atomically: `csv_name` with the given columns (see
+/// [`csv_string_with`]) and `boxes_name` (see [`boxes_string`]), whose first `untracked` lines
+/// are `0,0,0,0`, the OTB convention for "no box", for the frames before the tracker started.
+///
+/// # Errors
+/// As [`csv_string_with`] and [`boxes_string`], and [`AppError::Write`].
+pub fn write_track_tables(
+    dir: &Path,
+    [csv_name, boxes_name]: [&str; 2],
+    records: &[FrameRecord],
+    columns: CsvColumns,
+    untracked: usize,
+) -> Result<()> {
+    write_csv_with(&dir.join(csv_name), records, columns)?;
+    let boxes = "0,0,0,0\n".repeat(untracked) + &boxes_string(records)?;
+    write_atomic(&dir.join(boxes_name), boxes.as_bytes())
+}
+
 /// What `summary.json` holds: the run's settings, its size and speed, and its scores when the
 /// sequence had ground truth.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -513,6 +531,32 @@ mod tests {
         bad.millis = f64::NAN;
         assert!(write_csv(&dir.path().join("bad.csv"), &[bad]).is_err());
         assert!(!dir.path().join("bad.csv").exists());
+    }
+
+    #[test]
+    fn track_tables_mark_untracked_frames_and_refuse_a_non_finite_box() {
+        let dir = tempfile::tempdir().unwrap();
+        let records = [plain(0), plain(1)];
+        let names = ["t.csv", "b.txt"];
+        write_track_tables(dir.path(), names, &records, CsvColumns::default(), 2).unwrap();
+        let boxes = std::fs::read_to_string(dir.path().join("b.txt")).unwrap();
+        assert_eq!(
+            boxes,
+            "0,0,0,0\n0,0,0,0\n6.00,18.00,8.00,4.00\n6.00,18.00,8.00,4.00\n"
+        );
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join("t.csv"))
+                .unwrap()
+                .lines()
+                .count(),
+            3
+        );
+        // A NaN box is an error, and no boxes file is left half-written.
+        let mut bad = plain(2);
+        bad.bbox.w = f64::NAN;
+        let names = ["t2.csv", "b2.txt"];
+        assert!(write_track_tables(dir.path(), names, &[bad], CsvColumns::default(), 0).is_err());
+        assert!(!dir.path().join("b2.txt").exists());
     }
 
     #[test]

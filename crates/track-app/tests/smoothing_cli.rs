@@ -9,20 +9,16 @@ fn run_smooth_writes_the_smoothed_track_beside_the_filtered_one() {
     let dir = tempfile::tempdir().unwrap();
     let frames = disc_frames(dir.path(), "disc", 12);
     let out = dir.path().join("out");
-    let run = track(&[
-        "run",
-        "--tracker",
-        "w-eval",
-        "--particles",
-        "60",
-        "--smooth",
-        "--quiet",
-        "--init",
-        DISC_INIT,
-        "--out",
-        s(&out),
-        s(&frames),
-    ]);
+    // w-eval on the disc frames into `out`, smoothed or not.
+    let run_into = |smooth: bool| {
+        let mut args = vec!["run", "--tracker", "w-eval", "--particles", "60", "--quiet"];
+        if smooth {
+            args.push("--smooth");
+        }
+        args.extend(["--init", DISC_INIT, "--out", s(&out), s(&frames)]);
+        track(&args)
+    };
+    let run = run_into(true);
     assert!(run.status.success(), "{}", common::stderr(&run));
     let filtered = std::fs::read_to_string(out.join("track.csv")).unwrap();
     let smoothed = std::fs::read_to_string(out.join("smoothed.csv")).unwrap();
@@ -33,19 +29,7 @@ fn run_smooth_writes_the_smoothed_track_beside_the_filtered_one() {
     let boxes = std::fs::read_to_string(out.join("smoothed_boxes.txt")).unwrap();
     assert_eq!(boxes.lines().count(), 12);
     // Without --smooth a rerun into the same folder leaves no stale smoothed files.
-    let again = track(&[
-        "run",
-        "--tracker",
-        "w-eval",
-        "--particles",
-        "60",
-        "--quiet",
-        "--init",
-        DISC_INIT,
-        "--out",
-        s(&out),
-        s(&frames),
-    ]);
+    let again = run_into(false);
     assert!(again.status.success());
     assert!(!out.join("smoothed.csv").exists() && !out.join("smoothed_boxes.txt").exists());
     // The head tracker records no particles: a setting error, exit 2.

@@ -4,6 +4,15 @@
 use trackers::{Frame, Preset, SmootherSettings, TrackerConfig, build};
 use vision_core::Ellipse;
 
+/// The disc's first-frame contour.
+const START: Ellipse = Ellipse {
+    cx: 45.0,
+    cy: 45.0,
+    a: 22.0,
+    b: 22.0,
+    angle: 0.0,
+};
+
 /// A bright disc of radius 22 on a textured background, moving 2 px right per frame.
 fn frame_at(k: usize) -> (usize, usize, Vec<f32>) {
     let (w, h) = (120, 90);
@@ -26,13 +35,7 @@ fn recording(preset: Preset, seed: u64) -> TrackerConfig {
 
 #[test]
 fn the_smoothed_run_covers_every_frame_and_ends_where_the_filter_ends() {
-    let start = Ellipse {
-        cx: 45.0,
-        cy: 45.0,
-        a: 22.0,
-        b: 22.0,
-        angle: 0.0,
-    };
+    let start = START;
     for preset in [Preset::M1, Preset::WHmm, Preset::WEval, Preset::Full] {
         for seed in 1..=2 {
             let mut tracker = build(recording(preset, seed)).unwrap();
@@ -93,13 +96,7 @@ fn the_smoothed_run_covers_every_frame_and_ends_where_the_filter_ends() {
 fn a_tracker_that_records_nothing_cannot_be_smoothed() {
     let mut tracker = build(Preset::WEval.config(50, 1)).unwrap();
     let (w, h, first) = frame_at(0);
-    let start = Ellipse {
-        cx: 45.0,
-        cy: 45.0,
-        a: 22.0,
-        b: 22.0,
-        angle: 0.0,
-    };
+    let start = START;
     tracker
         .init(Frame::new(w, h, &first).unwrap(), start)
         .unwrap();

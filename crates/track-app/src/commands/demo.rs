@@ -12,9 +12,7 @@ use crate::evaluation::SyntheticSequence;
 use crate::metrics::evaluate;
 use crate::output::write_atomic;
 use crate::plots::{all_figures, write_figures};
-use crate::record::{
-    CsvColumns, Summary, boxes_string, status_counts, write_csv_with, write_summary,
-};
+use crate::record::{CsvColumns, Summary, status_counts, write_summary, write_track_tables};
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
 use crate::session::{ColourBy, DrawOptions, SessionOutput};
@@ -150,14 +148,12 @@ fn write_tracks(
         written.push(name);
     }
     write_gif(&args.out.join("track.gif"), &output.overlays, 80)?;
-    write_csv_with(
-        &args.out.join("track.csv"),
+    write_track_tables(
+        &args.out,
+        ["track.csv", "boxes.txt"],
         records,
         CsvColumns::of_tracker(config),
-    )?;
-    write_atomic(
-        &args.out.join("boxes.txt"),
-        boxes_string(records)?.as_bytes(),
+        0,
     )?;
     write_atomic(
         &args.out.join("groundtruth_rect.txt"),

@@ -12,10 +12,10 @@ use crate::groundtruth::{
     parse_ellipse_arg,
 };
 use crate::metrics::{SequenceMetrics, evaluate};
-use crate::output::write_atomic;
 use crate::plots::{all_figures, write_figures};
 use crate::record::{
-    CsvColumns, FrameRecord, Interruption, Summary, status_counts, write_csv_with, write_summary,
+    CsvColumns, FrameRecord, Interruption, Summary, status_counts, write_summary,
+    write_track_tables,
 };
 use crate::render::{thumbnail, write_gif, write_png};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
@@ -594,27 +594,16 @@ fn write_tables(
     smoothed: Option<&[FrameRecord]>,
     written: &mut Vec<String>,
 ) -> Result<()> {
-    write_csv_with(
-        &args.out.join("track.csv"),
-        records,
-        CsvColumns::of_tracker(config),
-    )?;
-    write_atomic(
-        &args.out.join("boxes.txt"),
-        boxes_with_gap(start, records).as_bytes(),
-    )?;
-    written.extend(["track.csv".to_owned(), "boxes.txt".to_owned()]);
-    if let Some(smoothed) = smoothed {
-        write_csv_with(
-            &args.out.join("smoothed.csv"),
-            smoothed,
-            CsvColumns::of_tracker(config),
-        )?;
-        write_atomic(
-            &args.out.join("smoothed_boxes.txt"),
-            boxes_with_gap(start, smoothed).as_bytes(),
-        )?;
-        written.extend(["smoothed.csv".to_owned(), "smoothed_boxes.txt".to_owned()]);
+    let columns = CsvColumns::of_tracker(config);
+    let tables = [
+        ("track.csv", "boxes.txt", Some(records)),
+        ("smoothed.csv", "smoothed_boxes.txt", smoothed),
+    ];
+    for (csv, boxes, records) in tables {
+        if let Some(records) = records {
+            write_track_tables(&args.out, [csv, boxes], records, columns, start)?;
+            written.extend([csv.to_owned(), boxes.to_owned()]);
+        }
     }
     Ok(())
 }
@@ -790,17 +779,6 @@ fn stream_progress(quiet: bool) -> ProgressBar {
         bar.set_style(style);
     }
     bar
-}
-
-/// `boxes.txt`: one line per input frame; frames before the tracker started (an OTB sequence
-/// whose first label comes later) get `0,0,0,0`, the OTB convention for "no box".
-fn boxes_with_gap(start: usize, records: &[FrameRecord]) -> String {
-    let mut s = "0,0,0,0\n".repeat(start);
-    for r in records {
-        let b = r.bbox;
-        s.push_str(&format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.w, b.h));
-    }
-    s
 }
 
 /// Scores the tracked frames against the ground truth of the same frames.
