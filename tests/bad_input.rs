@@ -1,7 +1,7 @@
 //! Every kind of bad input gives one clear error naming the file or value, a non-zero exit code,
 //! no panic, and no output at all (the output folder is never created).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

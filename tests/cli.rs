@@ -1,6 +1,6 @@
 //! The `track` command line end to end on small generated sequences.
 
-mod common;
+use crate::common;
 
 use common::{otb_folder, s, track};
 

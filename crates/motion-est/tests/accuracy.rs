@@ -7,7 +7,7 @@
 //! the original implementation's own figures, so no extra tolerance is added.
 #![allow(missing_docs)]
 
-mod common;
+use crate::common;
 
 use common::*;
 use motion_est::{FrameBuffers, ModelSpec, MotionEstimator, MotionModel, Region, Settings};

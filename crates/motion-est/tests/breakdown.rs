@@ -12,14 +12,14 @@
 //! at 45 %. A flagged estimate (`MotionEstimate::reliable == false`) counts as a failure too:
 //! the tracker discards it.
 //!
-//! `cargo test -p motion-est --release --test breakdown -- --nocapture` prints the table.
+//! `cargo test -p motion-est --release --test integration breakdown:: -- --nocapture` prints the table.
 //!
 //! The texture is `tests/common`'s; every frame row is evaluated by rotating each sinusoid's
 //! phasor along the row (`Texture::row`: the warped coordinates are affine in the column), which
 //! makes the exact pairs cheap enough for a grid of several hundred estimates.
 #![allow(missing_docs)]
 
-mod common;
+use crate::common;
 
 use common::Texture;
 use motion_est::{ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region};

@@ -7,7 +7,7 @@
 //! (the original implementation is off by ~2.4×).
 #![allow(missing_docs)]
 
-mod common;
+use crate::common;
 
 use common::*;
 use motion_est::{ModelSpec, MotionEstimator, MotionModel, Region, Settings};

@@ -2,7 +2,7 @@
 //! `parallel`); the result must be bit-identical whatever the number of threads.
 #![allow(missing_docs)]
 
-mod common;
+use crate::common;
 
 use common::*;
 use motion_est::{ModelSpec, MotionEstimate, MotionEstimator, MotionModel, Region, Settings};

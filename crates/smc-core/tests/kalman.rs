@@ -11,7 +11,7 @@
 //! update (a missing prior/proposal ratio, or a log-evidence that ignores the previous weights)
 //! misses it by far more.
 
-mod common;
+use crate::common;
 
 use common::{AR1, Ar1, ConstantVelocity, gauss, kalman_1d, kalman_2d, normal_log_pdf};
 use rand::Rng;

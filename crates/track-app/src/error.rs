@@ -71,6 +71,14 @@ pub enum AppError {
         /// The output folder.
         out: PathBuf,
     },
+    /// A signal stopped the command before it began tracking: nothing was written.
+    #[error("interrupted by {signal} before tracking began; nothing was written")]
+    InterruptedBeforeStart {
+        /// The signal's name.
+        signal: &'static str,
+        /// The signal's number: the exit code is 128 + it.
+        number: u8,
+    },
 }
 
 impl AppError {
@@ -82,7 +90,8 @@ impl AppError {
             AppError::BadInput { .. } => 3,
             AppError::Write { .. } => 4,
             AppError::StdoutClosed => 0,
-            AppError::Interrupted { number, .. } => 128u8.saturating_add(*number),
+            AppError::Interrupted { number, .. }
+            | AppError::InterruptedBeforeStart { number, .. } => 128u8.saturating_add(*number),
         }
     }
 

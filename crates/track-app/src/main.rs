@@ -11,8 +11,19 @@ use track_app::cli::{Cli, run};
 fn main() -> ExitCode {
     let cli = match Cli::try_parse_from(std::env::args_os()) {
         Ok(cli) => cli,
-        // clap prints help, version and usage errors itself, with its own exit codes (0 or 2),
-        // and ignores a closed standard output.
+        // Help and version go to standard output like any other output: a closed pipe ends
+        // quietly, a full disk is exit 4 (clap's own printing ignores both).
+        Err(e) if !e.use_stderr() => {
+            let text = e.render().to_string();
+            return match track_app::output::print_stdout(&text) {
+                Ok(()) | Err(AppError::StdoutClosed) => ExitCode::SUCCESS,
+                Err(err) => {
+                    let _ = writeln!(std::io::stderr(), "error: {err}");
+                    ExitCode::from(err.exit_code())
+                }
+            };
+        }
+        // clap prints usage errors itself, with exit 2.
         Err(e) => e.exit(),
     };
     match run(cli) {

@@ -2,6 +2,8 @@
 //!
 //! - Every file is written to a temporary sibling and renamed into place, so an interrupted run
 //!   leaves only complete files ([`write_atomic`], [`AtomicFile`]).
+//! - An output folder is owned by one command at a time, and `track` removes or replaces only
+//!   the files its manifest says it wrote there ([`OutputFolder`]).
 //! - A path that already exists must be a regular file: a FIFO, a symbolic link, a device node or
 //!   a folder in its place is refused ([`check_replaceable`]), because the rename would silently
 //!   replace it (a FIFO by a file, `/dev/full` by a file when run as root, a symlink instead of its
@@ -14,6 +16,9 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::{AppError, Result};
+
+mod folder;
+pub use folder::{LOCK_NAME, MANIFEST_NAME, OutputFolder, TEMP_SUFFIX};
 
 /// The name used in messages for standard output.
 pub const STDOUT_NAME: &str = "standard output";
@@ -45,7 +50,7 @@ pub fn check_replaceable(path: &Path) -> Result<()> {
 }
 
 /// What a non-regular file is, for messages.
-fn file_kind(t: &std::fs::FileType) -> &'static str {
+pub(super) fn file_kind(t: &std::fs::FileType) -> &'static str {
     if t.is_dir() {
         return "a folder";
     }
@@ -144,6 +149,7 @@ impl AtomicFile {
     /// cannot be created.
     pub fn create(path: &Path) -> Result<Self> {
         check_replaceable(path)?;
+        folder::record(path)?;
         let wrap = |source| AppError::Write {
             path: path.to_path_buf(),
             source,
@@ -151,8 +157,8 @@ impl AtomicFile {
         let dir = parent_dir(path);
         create_dir(dir)?;
         let tmp = tempfile::Builder::new()
-            .prefix(".track-")
-            .suffix(".tmp")
+            .prefix(&folder::temp_prefix(path))
+            .suffix(TEMP_SUFFIX)
             .tempfile_in(dir)
             .map_err(wrap)?;
         Ok(Self {
@@ -240,22 +246,6 @@ pub fn write_atomic_with(
         return Err(file.error(e));
     }
     file.commit()
-}
-
-/// Removes the earlier output `path` if it is a regular file; refuses anything else in its place.
-///
-/// # Errors
-/// [`AppError::Write`] as [`check_replaceable`], or when the file cannot be removed.
-pub fn remove_output(path: &Path) -> Result<bool> {
-    check_replaceable(path)?;
-    match std::fs::remove_file(path) {
-        Ok(()) => Ok(true),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
-        Err(source) => Err(AppError::Write {
-            path: path.to_path_buf(),
-            source,
-        }),
-    }
 }
 
 /// Checks that files can be created in the folder `dir` (creating it when absent) by creating
@@ -355,7 +345,6 @@ mod tests {
         assert_eq!(err.exit_code(), 4);
         assert!(err.to_string().contains("a folder"), "{err}");
         assert!(folder.is_dir());
-        assert!(remove_output(&folder).is_err());
     }
 
     #[cfg(unix)]

@@ -135,12 +135,22 @@ impl Session {
             Original::Luma(_) => trackers::Frame::new(w, h, grey),
         }
         .map_err(|e| AppError::input(&frame.name, e.to_string()))?;
+        let failed = |e| AppError::computation(format!("tracking {}", frame.name), e);
         let estimate = if self.started {
-            self.tracker.update(view)
+            self.tracker.update(view).map_err(failed)
         } else {
-            self.tracker.init(view, *init)
-        }
-        .map_err(|e| AppError::computation(format!("tracking {}", frame.name), e))?;
+            self.tracker.init(view, *init).map_err(|e| match e {
+                // The tracker cannot start from this box: a setting (exit 2), not a failure.
+                trackers::Error::InvalidSetting {
+                    name: "initial ellipse",
+                    reason,
+                } => AppError::setting(
+                    "the initial box (--init, or the first labelled box)",
+                    reason,
+                ),
+                other => failed(other),
+            })
+        }?;
         self.started = true;
         if let Some(draw) = self.draw {
             self.overlays

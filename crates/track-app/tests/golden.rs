@@ -14,14 +14,14 @@
 //! A change that moves a tracker's output on purpose regenerates the files with
 //!
 //! ```sh
-//! UPDATE_GOLDEN=1 cargo test -p track-app --test golden
+//! UPDATE_GOLDEN=1 cargo test -p track-app --test integration golden::
 //! ```
 //!
 //! which rewrites `assets/golden/<preset>/{track.csv,boxes.txt}` (atomically: a temporary file
 //! beside each, then a rename) instead of comparing, and says so on standard error. Review the
 //! diff before committing it.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 
@@ -118,7 +118,7 @@ fn presets_reproduce_their_golden_tracks_on_a_short_clutter_scene() {
             }
             let expected = std::fs::read_to_string(&golden).unwrap_or_else(|e| {
                 panic!(
-                    "{}: {e}; run `UPDATE_GOLDEN=1 cargo test -p track-app --test golden` to create it",
+                    "{}: {e}; run `UPDATE_GOLDEN=1 cargo test -p track-app --test integration golden::` to create it",
                     golden.display()
                 )
             });
@@ -138,7 +138,7 @@ fn presets_reproduce_their_golden_tracks_on_a_short_clutter_scene() {
     assert!(
         mismatches.is_empty(),
         "golden outputs differ ({}); if the change is intended, regenerate with \
-         `UPDATE_GOLDEN=1 cargo test -p track-app --test golden` and review the diff",
+         `UPDATE_GOLDEN=1 cargo test -p track-app --test integration golden::` and review the diff",
         mismatches.join("; ")
     );
 }

@@ -1,7 +1,7 @@
 //! Learning the switching parameters by EM on smoothed runs (issue 19): on a long synthetic
 //! sequence the learnt T_β matches the transition frequencies of the generator's true β sequence.
 
-mod common;
+use crate::common;
 
 use scene_synth::Scenario;
 use track_app::evaluation::SyntheticSequence;

@@ -4,7 +4,7 @@
 //! error line, no parameters or standard deviations on standard output, and with `--json` an
 //! object whose `status` is `"failed"`.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

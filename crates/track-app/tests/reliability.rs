@@ -90,7 +90,7 @@ fn temporaries(dir: &Path) -> Vec<PathBuf> {
         } else if p
             .file_name()
             .and_then(|n| n.to_str())
-            .is_some_and(|n| n.starts_with(".track-") || n.ends_with(".tmp"))
+            .is_some_and(|n| n.ends_with(track_app::output::TEMP_SUFFIX) || n.ends_with(".tmp"))
         {
             found.push(p);
         }

@@ -2,7 +2,7 @@
 //! starts the tracker from the ellipse given (or is refused), a zero-size first box is an error,
 //! and `track.csv` has the same columns whatever the number of frames.
 
-mod common;
+use crate::common;
 
 use common::{DISC_INIT, disc_frames, disc_image, one_error_line, s, track};
 

@@ -1,6 +1,6 @@
 //! `track run --smooth` (issue 19): smoothed estimates written beside the filtered ones.
 
-mod common;
+use crate::common;
 
 use common::{DISC_INIT, disc_frames, one_error_line, s, track};
 

@@ -8,7 +8,7 @@
 //! `TRACK_SKIP_FFMPEG_TESTS=1` skips them whatever is installed. The missing-program test runs
 //! always.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

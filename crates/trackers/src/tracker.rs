@@ -115,6 +115,14 @@ pub trait Tracker: Send {
     }
 }
 
+/// An ellipse in words, for messages.
+pub(crate) fn describe(e: &Ellipse) -> String {
+    format!(
+        "the ellipse centred at ({}, {}) with semi-axes {} and {} at angle {} rad",
+        e.cx, e.cy, e.a, e.b, e.angle
+    )
+}
+
 /// Checks an initial ellipse: finite, with positive semi-axes.
 ///
 /// # Errors
@@ -124,7 +132,10 @@ pub(crate) fn check_initial(ellipse: &Ellipse) -> Result<()> {
     if values.iter().any(|v| !v.is_finite()) || !(ellipse.a > 0.0 && ellipse.b > 0.0) {
         return Err(Error::InvalidSetting {
             name: "initial ellipse",
-            reason: format!("{ellipse:?} must be finite with positive semi-axes"),
+            reason: format!(
+                "{} must be finite with positive semi-axes",
+                describe(ellipse)
+            ),
         });
     }
     Ok(())

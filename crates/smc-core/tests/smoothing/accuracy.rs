@@ -8,7 +8,7 @@ use smc_core::{
     sample_trajectories, smooth_marginals,
 };
 
-use crate::models::*;
+use super::models::*;
 
 // ---------------------------------------------------------------------------------------------
 // Accuracy against RTS.

@@ -7,7 +7,7 @@ use smc_core::{
     smooth_marginals,
 };
 
-use crate::models::*;
+use super::models::*;
 
 // ---------------------------------------------------------------------------------------------
 // Determinism.

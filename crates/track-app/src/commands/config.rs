@@ -11,7 +11,8 @@ use crate::{AppError, Result};
     track config m3 > m3.json                      # edit, then: track run SEQ --config m3.json\n  \
     track config full --toml --particles 500 > full.toml")]
 pub struct Args {
-    /// Tracker preset: m1, m2, m3, w-fixed, w-switch, w-hmm, w-occ, w-eval, full.
+    /// Tracker preset.
+    #[arg(value_parser = crate::commands::preset_parser())]
     pub preset: String,
     /// Number of particles.
     #[arg(long, default_value_t = DEFAULT_PARTICLES)]
@@ -27,11 +28,15 @@ pub struct Args {
 /// Runs `track config`.
 ///
 /// # Errors
-/// [`AppError::InvalidSetting`] for an unknown preset.
+/// [`AppError::InvalidSetting`] for an unknown preset, or a configuration that would not load
+/// (`--particles` out of range): nothing is printed then.
 pub fn run(args: &Args) -> Result<()> {
     let preset =
         Preset::from_name(&args.preset).map_err(|e| AppError::setting("preset", e.to_string()))?;
     let config = preset.config(args.particles, args.seed);
+    config
+        .validate()
+        .map_err(|e| AppError::setting("--particles", e.to_string()))?;
     let text = if args.toml {
         toml::to_string_pretty(&config).map_err(|e| AppError::computation("TOML", e))?
     } else {

@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = ScenarioArg::Mclutter)]
     pub scenario: ScenarioArg,
     /// Tracker preset.
-    #[arg(long, default_value = "full")]
+    #[arg(long, default_value = "full", value_parser = crate::commands::preset_parser())]
     pub tracker: String,
     /// Number of particles.
     #[arg(long, default_value_t = DEFAULT_PARTICLES)]
@@ -60,8 +60,8 @@ pub fn run(args: &Args) -> Result<()> {
         return Err(AppError::setting("--particles", "must be at least 1"));
     }
     let config = preset.config(args.particles, args.seed);
-    // An output folder that cannot be made (a file in its place) is found before the work.
-    crate::output::probe_dir(&args.out)?;
+    // The output folder is checked and locked before the work (crate::output::OutputFolder).
+    let _folder = crate::output::OutputFolder::open(&args.out, &[])?;
     let seq = SyntheticSequence::render(args.scenario.into(), None, args.seed, &[])?;
     let draw = DrawOptions {
         colour_by: args.colour_by,

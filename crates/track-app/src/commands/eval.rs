@@ -114,7 +114,7 @@ pub struct OtbArgs {
     pub run: TrackerRuns,
     /// Edge threshold of the measurement lines, grey levels per pixel (default: the
     /// preset's, 8); see `track run --help`.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::commands::run::parse_edge_threshold)]
     pub edge_threshold: Option<f32>,
     /// A tracker configuration file (JSON or TOML, as `track config PRESET` prints), run
     /// beside the presets (repeatable).
@@ -241,7 +241,7 @@ fn run_table1(args: &Table1Args) -> Result<()> {
         positive("--frames", *f)?;
     }
     let trackers = presets(trackers, &TABLE1_TRACKERS)?;
-    crate::output::probe_dir(out)?;
+    let _folder = crate::output::OutputFolder::open(out, &[])?;
     let seq = SyntheticSequence::render((*scenario).into(), *frames, *scene_seed, set)?;
     let bar = progress(
         (trackers.len() * TABLE1_COLUMNS.len()) as u64,
@@ -289,7 +289,7 @@ fn run_switching(args: &SwitchingArgs) -> Result<()> {
         None,
     )?;
     let seed = &run.seed;
-    crate::output::probe_dir(out)?;
+    let _folder = crate::output::OutputFolder::open(out, &[])?;
     let smoother = SmootherSettings::default();
     let mut rows = Vec::new();
     for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
@@ -332,8 +332,9 @@ fn run_otb(args: &OtbArgs) -> Result<()> {
     } = args;
     let runs = run.configs(configs, &[Preset::Head], *edge_threshold)?;
     // Results are written after every sequence is tracked: an output folder that cannot be
-    // made is found before that.
-    crate::output::probe_dir(out)?;
+    // made, or is in use, is found before that.
+    let inputs: Vec<&Path> = sequences.iter().map(PathBuf::as_path).collect();
+    let _folder = crate::output::OutputFolder::open(out, &inputs)?;
     let mut rows: Vec<(String, String, SequenceMetrics)> = Vec::new();
     for config in &runs {
         let mut per_tracker = Vec::new();

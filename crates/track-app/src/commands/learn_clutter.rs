@@ -55,6 +55,12 @@ pub fn run(args: &Args) -> Result<()> {
             format!("{} is more than the maximum, {MAX_LINES}", args.lines),
         ));
     }
+    if args.lines == 0 {
+        return Err(AppError::setting("--lines", "must be at least 1"));
+    }
+    if args.k == 0 {
+        return Err(AppError::setting("--k", "must be at least 1 clutter class"));
+    }
     if args.k > MAX_K {
         return Err(AppError::setting(
             "--k",

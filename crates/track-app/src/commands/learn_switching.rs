@@ -28,9 +28,10 @@ pub struct Args {
     #[arg(required = true, value_name = "SEQUENCES")]
     pub sequences: Vec<PathBuf>,
     /// The tracker preset whose parameters are learnt (one with switching processes: w-switch,
-    /// w-hmm, w-occ, w-eval, full).
-    #[arg(long, default_value = "w-eval")]
-    pub tracker: String,
+    /// w-hmm, w-occ, w-eval, full) [default: w-eval]. Not with --config, which names its own
+    /// tracker.
+    #[arg(long, value_parser = crate::commands::preset_parser(), conflicts_with = "config")]
+    pub tracker: Option<String>,
     /// Start from this configuration instead of the preset's.
     #[arg(long)]
     pub config: Option<PathBuf>,
@@ -107,7 +108,7 @@ pub fn run(args: &Args) -> Result<()> {
         ));
     }
     let mut config = tracker_config(
-        &args.tracker,
+        args.tracker.as_deref().unwrap_or("w-eval"),
         args.config.as_deref(),
         Overrides {
             particles: Some(args.particles.unwrap_or(DEFAULT_PARTICLES)),

@@ -28,6 +28,8 @@ mod thinned;
 use crate::session::{ColourBy, DrawOptions, Session};
 use crate::{AppError, Result};
 
+/// The tracker `track run` uses when neither `--tracker` nor `--config` names one.
+pub const DEFAULT_TRACKER: &str = "head";
 /// Default number of particles.
 pub const DEFAULT_PARTICLES: usize = 200;
 /// Default seed.
@@ -52,10 +54,10 @@ pub struct Args {
     /// but .y4m, decoded by ffmpeg, which must be on PATH), a .y4m file, or - for Y4M on standard
     /// input.
     pub sequence: String,
-    /// Tracker preset: head (recommended for real footage), m1, m2, m3, w-fixed, w-switch, w-hmm,
-    /// w-occ, w-eval, full.
-    #[arg(long, default_value = "head")]
-    pub tracker: String,
+    /// Tracker preset [default: head, recommended for real footage]. Not with --config, which
+    /// names its own tracker.
+    #[arg(long, value_parser = crate::commands::preset_parser(), conflicts_with = "config")]
+    pub tracker: Option<String>,
     /// Number of particles [default: 200, or the configuration file's].
     #[arg(long)]
     pub particles: Option<usize>,
@@ -63,11 +65,17 @@ pub struct Args {
     #[arg(long)]
     pub seed: Option<u64>,
     /// Initial box x,y,w,h on the first frame (default: the first labelled box of an OTB folder).
-    #[arg(long, value_parser = parse_box, conflicts_with = "init_ellipse")]
+    /// A box may start left of or above the frame: --init -20,-20,44,56.
+    #[arg(
+        long,
+        value_parser = parse_box,
+        conflicts_with = "init_ellipse",
+        allow_hyphen_values = true
+    )]
     pub init: Option<BoundingBox>,
     /// Initial ellipse cx,cy,a,b,angle (angle in radians) on the first frame. Only the w-*
     /// trackers rotate; the others refuse an angle that is not a multiple of π/2.
-    #[arg(long, value_parser = parse_ellipse)]
+    #[arg(long, value_parser = parse_ellipse, allow_hyphen_values = true)]
     pub init_ellipse: Option<Ellipse>,
     /// A tracker configuration (JSON or TOML, the `TrackerConfig` of the trackers crate); replaces
     /// the preset.
@@ -97,7 +105,7 @@ pub struct Args {
     /// Edge threshold of the measurement lines, grey levels per pixel [default: the preset's, 8,
     /// the value the synthetic clutter is calibrated for]. Real footage is more textured: on
     /// girl_mil 24 works better (docs/RESULTS.md).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_edge_threshold)]
     pub edge_threshold: Option<f32>,
     /// Also smooth the run once every frame is tracked (forward filtering–backward smoothing of
     /// the recorded particles: each frame's estimate given the whole sequence) and write
@@ -117,6 +125,28 @@ pub struct Args {
 /// The message of [`parse_box_arg`].
 pub fn parse_box(s: &str) -> std::result::Result<BoundingBox, String> {
     parse_box_arg(s, "--init").map_err(|e| e.to_string())
+}
+
+/// Largest `--edge-threshold`: a grey-level step of 255 across one pixel, the steepest edge an
+/// 8-bit frame can hold, is far below it; a larger threshold finds no edge at all.
+pub const MAX_EDGE_THRESHOLD: f64 = 1000.0;
+
+/// Parses `--edge-threshold` for clap: a number in (0, [`MAX_EDGE_THRESHOLD`]], reported as the
+/// user typed it when it is out of range.
+///
+/// # Errors
+/// A message that names the value and the range.
+pub fn parse_edge_threshold(s: &str) -> std::result::Result<f32, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s} is not a number of grey levels per pixel"))?;
+    if !(v.is_finite() && v > 0.0 && v <= MAX_EDGE_THRESHOLD) {
+        return Err(format!(
+            "{s} is out of range: give a number of grey levels per pixel in (0, {MAX_EDGE_THRESHOLD}]"
+        ));
+    }
+    Ok(v as f32)
 }
 
 /// Parses `--init-ellipse cx,cy,a,b,angle` (angle in radians) for clap.
@@ -286,9 +316,7 @@ pub fn progress(len: u64, quiet: bool, what: &str) -> ProgressBar {
     bar
 }
 
-/// The files `track run` writes in `--out`, besides `overlay/NNNN.png` and `plots/*.svg`. At the
-/// start of a run, after its inputs are checked, the previous run's files of these names are
-/// removed, so a folder never mixes two runs.
+/// The files `track run` writes in `--out`, besides `overlay/NNNN.png` and `plots/*.svg`.
 pub const OUTPUT_FILES: [&str; 7] = [
     "track.csv",
     "boxes.txt",
@@ -299,40 +327,43 @@ pub const OUTPUT_FILES: [&str; 7] = [
     "report.html",
 ];
 
-/// Prepares `--out` before tracking: creates it, refuses it if it is not a folder or cannot be
-/// written to, and removes the outputs of an earlier run (the files of [`OUTPUT_FILES`], the
-/// overlays `overlay/<digits>.png` and the plots `plots/*.svg`); anything else is left alone.
+/// Whether `path` is named as an overlay `track run` writes (`<digits>.png`).
+fn is_overlay_name(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e == "png")
+        && path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// Opens `--out` before tracking ([`OutputFolder::open`](crate::output::OutputFolder)): refuses
+/// a symbolic link, a folder that holds one of `inputs`, or one in use by another command;
+/// removes what `track` wrote there before (its manifest says what, and nothing else is ever
+/// removed); then checks that no file of another origin takes the name of an output this run
+/// will write, so that the run cannot fail on it halfway.
 ///
 /// # Errors
-/// [`AppError::Write`] naming the folder or the file: not a folder, not writable, or an output
-/// name taken by something other than a regular file (a FIFO, a symbolic link, a folder).
-pub fn prepare_out(out: &Path) -> Result<()> {
-    crate::output::probe_dir(out)?;
+/// [`AppError::Write`] naming the folder or the file.
+pub fn prepare_out(
+    out: &Path,
+    inputs: &[&Path],
+    overlay: bool,
+    plots: bool,
+) -> Result<crate::output::OutputFolder> {
+    let folder = crate::output::OutputFolder::open(out, inputs)?;
     for name in OUTPUT_FILES {
-        crate::output::remove_output(&out.join(name))?;
+        folder.check_free(Path::new(name), None)?;
     }
-    let ours = |sub: &str, keep: &dyn Fn(&Path) -> bool| -> Result<()> {
-        let dir = out.join(sub);
-        let Ok(entries) = std::fs::read_dir(&dir) else {
-            return Ok(());
-        };
-        for entry in entries.flatten() {
-            let path = entry.path();
-            if keep(&path) {
-                crate::output::remove_output(&path)?;
-            }
-        }
-        Ok(())
-    };
-    let ext_is = |p: &Path, ext: &str| p.extension().is_some_and(|e| e == ext);
-    ours("overlay", &|p| {
-        ext_is(p, "png")
-            && p.file_stem()
-                .and_then(|s| s.to_str())
-                .is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
-    })?;
-    ours("plots", &|p| ext_is(p, "svg"))?;
-    Ok(())
+    if overlay {
+        folder.check_free(Path::new("overlay"), Some(&is_overlay_name))?;
+    }
+    if plots {
+        folder.check_free(
+            Path::new("plots"),
+            Some(&|p: &Path| p.extension().is_some_and(|e| e == "svg")),
+        )?;
+    }
+    Ok(folder)
 }
 
 /// What one frame read from the sequence produced: the reader runs on its own thread, one frame
@@ -350,12 +381,23 @@ pub fn prepare_out(out: &Path) -> Result<()> {
 /// # Errors
 /// See [`AppError`].
 pub fn run(args: &Args) -> Result<()> {
-    let (input, source) = CheckedInput::open(args)?;
+    // First of all, so that a signal during the checks ends the run cleanly, with a message.
+    let signals = signals::StopSignals::install()?;
+    let (input, source) = CheckedInput::open(args, &signals)?;
     let tracker = trackers::build(input.config.clone())
         .map_err(|e| AppError::setting("--tracker", e.to_string()))?;
-    // Everything the run reads is checked; now the output folder, before any tracking.
-    prepare_out(&args.out)?;
-    let signals = signals::StopSignals::install()?;
+    // Everything the run reads is checked; now the output folder, before any tracking. It stays
+    // locked until the outputs are written.
+    let inputs: Vec<&Path> = [
+        Some(Path::new(&args.sequence)),
+        input.groundtruth.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .filter(|p| *p != Path::new("-"))
+    .collect();
+    let _folder = prepare_out(&args.out, &inputs, args.overlay, args.plots)?;
+    signals.stop_if_received()?;
 
     let draw = (args.overlay || args.gif || args.report).then(|| DrawOptions {
         colour_by: args.colour_by,
@@ -396,13 +438,15 @@ struct CheckedInput {
     start: usize,
     /// The contour the tracker starts from.
     init: Ellipse,
+    /// The ground-truth file, when the input has one.
+    groundtruth: Option<PathBuf>,
 }
 
 impl CheckedInput {
     /// Checks the settings and the input; returns them with the frames to track.
-    fn open(args: &Args) -> Result<(Self, Source)> {
+    fn open(args: &Args, signals: &signals::StopSignals) -> Result<(Self, Source)> {
         let mut config = tracker_config(
-            &args.tracker,
+            args.tracker.as_deref().unwrap_or(DEFAULT_TRACKER),
             args.config.as_deref(),
             Overrides {
                 particles: args.particles,
@@ -431,7 +475,9 @@ impl CheckedInput {
                 .ok_or_else(|| AppError::input(&args.sequence, "a stream without a frame size"))?;
             (None, w, h)
         } else {
-            let info = sequence.source.validate_all()?;
+            let info = sequence
+                .source
+                .validate_all_with(&mut |_| signals.stop_if_received())?;
             (Some(info.frames), info.width, info.height)
         };
         let truth = match (&sequence.groundtruth, known_frames) {
@@ -454,6 +500,7 @@ impl CheckedInput {
             truth,
             start,
             init,
+            groundtruth: sequence.groundtruth.clone(),
         };
         Ok((input, sequence.source))
     }

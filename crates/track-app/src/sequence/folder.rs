@@ -220,11 +220,15 @@ impl FrameSource for ImageFolder {
         }))
     }
 
-    fn validate_all(&self) -> Result<SequenceInfo> {
+    fn validate_all_with(
+        &self,
+        on_frame: &mut dyn FnMut(usize) -> Result<()>,
+    ) -> Result<SequenceInfo> {
         let mut first = None;
         let mut size = (0, 0);
-        for path in &self.paths {
+        for (k, path) in self.paths.iter().enumerate() {
             size = Self::decode_checked(path, &mut first)?.1;
+            on_frame(k + 1)?;
         }
         Ok(SequenceInfo {
             frames: self.paths.len(),

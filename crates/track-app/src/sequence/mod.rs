@@ -120,7 +120,20 @@ pub trait FrameSource {
     /// The first error [`FrameSource::next_frame`] would meet, or an empty sequence;
     /// [`AppError::BadInput`] for a stream ([`FrameSource::is_stream`]), which cannot be read
     /// twice.
-    fn validate_all(&self) -> Result<SequenceInfo>;
+    fn validate_all(&self) -> Result<SequenceInfo> {
+        self.validate_all_with(&mut |_| Ok(()))
+    }
+
+    /// [`FrameSource::validate_all`], calling `on_frame` with the number of frames checked so
+    /// far after each frame: to show progress, or to stop the pre-scan (a signal) by returning
+    /// an error, which the pre-scan returns at once.
+    ///
+    /// # Errors
+    /// As [`FrameSource::validate_all`], or the error of `on_frame`.
+    fn validate_all_with(
+        &self,
+        on_frame: &mut dyn FnMut(usize) -> Result<()>,
+    ) -> Result<SequenceInfo>;
 
     /// Whether the source is a stream (Y4M on standard input) that can be read only once: it has
     /// no [`FrameSource::validate_all`], and each frame is checked as it is read.
@@ -200,10 +213,13 @@ impl FrameSource for Source {
         }
     }
 
-    fn validate_all(&self) -> Result<SequenceInfo> {
+    fn validate_all_with(
+        &self,
+        on_frame: &mut dyn FnMut(usize) -> Result<()>,
+    ) -> Result<SequenceInfo> {
         match self {
-            Source::Images(s) => s.validate_all(),
-            Source::Y4m(s) | Source::Video { frames: s, .. } => s.validate_all(),
+            Source::Images(s) => s.validate_all_with(on_frame),
+            Source::Y4m(s) | Source::Video { frames: s, .. } => s.validate_all_with(on_frame),
         }
     }
 

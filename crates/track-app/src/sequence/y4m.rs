@@ -24,6 +24,9 @@ pub enum Y4mColour {
     /// 4:2:0 (`C420jpeg`, `C420paldv`, `C420`, `C420mpeg2`, or no `C` tag): chroma planes of
     /// ⌈w/2⌉×⌈h/2⌉.
     C420,
+    /// 4:2:2 (`C422`): chroma planes of ⌈w/2⌉×h, what ffmpeg gives for most camera and ProRes
+    /// footage without `-pix_fmt yuv420p`.
+    C422,
     /// 4:4:4 (`C444`): full-size chroma planes.
     C444,
     /// Luma only (`Cmono`).
@@ -35,6 +38,7 @@ impl Y4mColour {
     fn frame_bytes(self, w: usize, h: usize) -> usize {
         match self {
             Y4mColour::C420 => w * h + 2 * w.div_ceil(2) * h.div_ceil(2),
+            Y4mColour::C422 => w * h + 2 * w.div_ceil(2) * h,
             Y4mColour::C444 => 3 * w * h,
             Y4mColour::Mono => w * h,
         }
@@ -91,13 +95,14 @@ impl Y4mHeader {
                 "C" => {
                     colour = match value {
                         "420jpeg" | "420paldv" | "420" | "420mpeg2" => Y4mColour::C420,
+                        "422" => Y4mColour::C422,
                         "444" => Y4mColour::C444,
                         "mono" => Y4mColour::Mono,
                         other => {
                             return Err(AppError::input(
                                 name,
                                 format!(
-                                    "unsupported Y4M colour space {:?} (supported: C420jpeg, C420paldv, C420, C420mpeg2, C444, Cmono; convert with ffmpeg -pix_fmt yuv420p)",
+                                    "unsupported Y4M colour space {:?} (supported: C420jpeg, C420paldv, C420, C420mpeg2, C422, C444, Cmono; convert with ffmpeg -pix_fmt yuv420p)",
                                     format!("C{other}")
                                 ),
                             ));
@@ -218,14 +223,15 @@ fn read_frame_raw(
 }
 
 /// Converts one frame's planes to the grey frame (the luma plane as is) and an RGB original
-/// (full-range BT.601 conversion, chroma upsampled by repetition).
+/// (full-range BT.601 conversion, chroma upsampled by repetition: `(sub_x, sub_y)` pixels share
+/// one chroma sample).
 fn convert_frame(header: &Y4mHeader, raw: &[u8]) -> (GreyBuffer, Original) {
     let (w, h) = (header.width, header.height);
     let luma = &raw[..w * h];
     let grey = GreyBuffer::from_fn(w as u32, h as u32, |x, y| {
         Luma([f32::from(luma[y as usize * w + x as usize])])
     });
-    let (cw, sub) = match header.colour {
+    let (cw, (sub_x, sub_y)) = match header.colour {
         Y4mColour::Mono => {
             let img = GrayImage::from_raw(w as u32, h as u32, luma.to_vec());
             return (
@@ -233,15 +239,16 @@ fn convert_frame(header: &Y4mHeader, raw: &[u8]) -> (GreyBuffer, Original) {
                 Original::Luma(img.unwrap_or_else(|| GrayImage::new(w as u32, h as u32))),
             );
         }
-        Y4mColour::C420 => (w.div_ceil(2), 2),
-        Y4mColour::C444 => (w, 1),
+        Y4mColour::C420 => (w.div_ceil(2), (2, 2)),
+        Y4mColour::C422 => (w.div_ceil(2), (2, 1)),
+        Y4mColour::C444 => (w, (1, 1)),
     };
-    let ch = h.div_ceil(sub);
+    let ch = h.div_ceil(sub_y);
     let (u_plane, v_plane) = raw[w * h..].split_at(cw * ch);
     let mut rgb = RgbImage::new(w as u32, h as u32);
     for (i, px) in rgb.pixels_mut().enumerate() {
         let (x, y) = (i % w, i / w);
-        let c = (y / sub) * cw + x / sub;
+        let c = (y / sub_y) * cw + x / sub_x;
         let yv = f32::from(luma[i]);
         let u = f32::from(u_plane[c]) - 128.0;
         let v = f32::from(v_plane[c]) - 128.0;
@@ -419,13 +426,17 @@ impl FrameSource for Y4mSource {
         matches!(self.input, Y4mInput::Stream)
     }
 
-    fn validate_all(&self) -> Result<SequenceInfo> {
+    fn validate_all_with(
+        &self,
+        on_frame: &mut dyn FnMut(usize) -> Result<()>,
+    ) -> Result<SequenceInfo> {
         let mut reader = self.input.reader(&self.name)?;
         read_header(&mut reader, &self.name)?;
         let mut buf = Vec::with_capacity(self.header.frame_bytes());
         let mut frames = 0;
         while read_frame_raw(&mut reader, &self.header, frames, &self.name, &mut buf)? {
             frames += 1;
+            on_frame(frames)?;
         }
         if frames == 0 {
             return Err(AppError::input(
@@ -527,8 +538,30 @@ mod tests {
     }
 
     #[test]
+    fn y4m_422_shares_chroma_between_horizontal_neighbours() {
+        // 3×2 frame: luma 6 bytes, chroma planes 2×2 each; neutral chroma except U at (1, 1).
+        let planes = vec![
+            10, 20, 30, 40, 50, 60, 128, 128, 128, 228, 128, 128, 128, 128,
+        ];
+        let bytes = y4m_bytes("YUV4MPEG2 W3 H2 C422", &[planes]);
+        let mut src = Y4mSource::from_reader(Cursor::new(bytes), Path::new("v.y4m")).unwrap();
+        let f = src.next_frame().unwrap().unwrap();
+        let Original::Rgb(rgb) = &f.original else {
+            panic!("4:2:2 is colour")
+        };
+        // Row 0 has neutral chroma: grey equals luma.
+        assert_eq!(rgb.get_pixel(0, 0).0, [10, 10, 10]);
+        assert_eq!(rgb.get_pixel(2, 0).0, [30, 30, 30]);
+        // Row 1: pixel x = 2 reads chroma sample 1 of its own row (U = 228, blue up).
+        assert_eq!(rgb.get_pixel(0, 1).0, [40, 40, 40]);
+        assert_eq!(rgb.get_pixel(2, 1).0[2], 237);
+        assert_eq!(f.grey.get_pixel(2, 1).0[0], 60.0);
+        assert!(src.next_frame().unwrap().is_none());
+    }
+
+    #[test]
     fn y4m_unsupported_colour_space_is_named() {
-        for cs in ["C422", "C420p10", "C444alpha"] {
+        for cs in ["C411", "C420p10", "C444alpha"] {
             let bytes = y4m_bytes(&format!("YUV4MPEG2 W2 H2 {cs}"), &[vec![0; 8]]);
             let err = Y4mSource::from_reader(Cursor::new(bytes), Path::new("v.y4m")).unwrap_err();
             let msg = err.to_string();

@@ -275,7 +275,11 @@ impl Tracker for RegionTracker {
         let (Some(target), Some(background)) = (target, background) else {
             return Err(Error::InvalidSetting {
                 name: "initial ellipse",
-                reason: format!("{ellipse:?} covers no pixel of the frame or has no surroundings"),
+                reason: format!(
+                    "{} covers no pixel of the frame or leaves no background around it in the \
+                     frame; start from a smaller box inside the frame",
+                    crate::tracker::describe(&ellipse)
+                ),
             });
         };
         log_ratios(&target, &background, &mut self.ratios);

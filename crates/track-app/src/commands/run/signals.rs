@@ -85,6 +85,19 @@ impl StopSignals {
     }
 }
 
+impl StopSignals {
+    /// Before tracking begins: the error that ends the command when a signal was received.
+    ///
+    /// # Errors
+    /// [`AppError::InterruptedBeforeStart`].
+    pub fn stop_if_received(&self) -> Result<()> {
+        match self.received() {
+            Some((signal, number)) => Err(AppError::InterruptedBeforeStart { signal, number }),
+            None => Ok(()),
+        }
+    }
+}
+
 impl Drop for StopSignals {
     fn drop(&mut self) {
         #[cfg(unix)]

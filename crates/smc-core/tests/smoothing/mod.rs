@@ -16,9 +16,6 @@
 //! The models and the exact smoother are in `models.rs`; the accuracy tests against it in
 //! `accuracy.rs`; determinism, recording and bad input in `behaviour.rs`.
 
-#[path = "../common/mod.rs"]
-mod common;
-
 mod accuracy;
 mod behaviour;
 mod models;

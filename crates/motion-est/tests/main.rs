@@ -1,0 +1,8 @@
+//! The integration tests of this package, in one test binary (one binary per package keeps a
+//! cold build short: each test binary links the whole dependency tree).
+
+mod accuracy;
+mod breakdown;
+mod calibration;
+mod common;
+mod determinism;

@@ -1,0 +1,12 @@
+//! The integration tests of this package, in one test binary (one binary per package keeps a
+//! cold build short: each test binary links the whole dependency tree).
+
+mod common;
+mod golden;
+mod learn_switching;
+mod messages;
+mod motion_failures;
+mod reliability;
+mod silent_results;
+mod smoothing_cli;
+mod video;
