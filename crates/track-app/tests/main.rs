@@ -9,4 +9,5 @@ mod motion_failures;
 mod reliability;
 mod silent_results;
 mod smoothing_cli;
+mod user_files;
 mod video;

@@ -423,3 +423,157 @@ fn a_folder_named_groundtruth_rect_txt_is_named() {
         assert!(!e.contains("no ground truth"), "{e}");
     }
 }
+
+#[test]
+fn config_validates_before_printing_and_names_particles() {
+    for n in ["0", "1000000000000"] {
+        let o = track(&["config", "m1", "--particles", n]);
+        assert_eq!(o.status.code(), Some(2), "--particles {n}");
+        assert!(o.stdout.is_empty(), "nothing printed for --particles {n}");
+        let e = one_error_line(&o);
+        assert!(e.contains("--particles") && e.contains(n), "{e}");
+    }
+}
+
+#[test]
+fn an_initial_box_that_cannot_work_names_init_in_words() {
+    let dir = tempfile::tempdir().unwrap();
+    let tiny = dir.path().join("tiny");
+    std::fs::create_dir(&tiny).unwrap();
+    for k in 1..=2 {
+        image::GrayImage::from_pixel(8, 8, image::Luma([100]))
+            .save(tiny.join(format!("{k:04}.png")))
+            .unwrap();
+    }
+    let out = dir.path().join("out");
+    let o = track(&["run", s(&tiny), "--init", "0,0,8,8", "--out", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = one_error_line(&o);
+    assert!(
+        e.contains("--init") && e.contains("semi-axes 4 and 4"),
+        "{e}"
+    );
+    assert!(
+        !e.contains("Ellipse {") && !e.contains("cx:"),
+        "no debug struct: {e}"
+    );
+}
+
+#[test]
+fn a_box_starting_left_of_and_above_the_frame_is_accepted() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = disc_frames(dir.path(), "f", 3);
+    let out = dir.path().join("out");
+    for (flag, value) in [
+        ("--init", "-4,-6,40,44"),
+        ("--init-ellipse", "-2,30,12,12,0"),
+    ] {
+        let o = track(&[
+            "run",
+            s(&frames),
+            flag,
+            value,
+            "--tracker",
+            "m1",
+            "--out",
+            s(&out),
+            "--quiet",
+        ]);
+        if flag == "--init" {
+            assert!(o.status.success(), "{flag} {value}: {}", common::stderr(&o));
+            assert_eq!(common::summary(&out)["frames"], 3);
+        } else {
+            // Parsed (not mistaken for an option); the centre left of the frame is then refused
+            // by name.
+            assert_eq!(o.status.code(), Some(2));
+            let e = one_error_line(&o);
+            assert!(e.contains("--init-ellipse") || e.contains("initial"), "{e}");
+        }
+    }
+}
+
+#[test]
+fn edge_thresholds_out_of_range_are_quoted_as_typed() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = disc_frames(dir.path(), "f", 2);
+    let out = dir.path().join("out");
+    for value in ["1e308", "0", "-3", "1001"] {
+        let arg = format!("--edge-threshold={value}");
+        let o = track(&[
+            "run",
+            s(&frames),
+            "--init",
+            DISC_INIT,
+            "--out",
+            s(&out),
+            &arg,
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{value}");
+        let e = common::stderr(&o);
+        let first = e.lines().next().unwrap_or_default();
+        assert!(
+            first.contains(value) && first.contains("(0, 1000]"),
+            "{first}"
+        );
+        assert!(!first.contains("inf"), "{first}");
+    }
+}
+
+#[test]
+fn tracker_and_config_together_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = disc_frames(dir.path(), "f", 2);
+    let config = dir.path().join("m1.toml");
+    std::fs::write(&config, track(&["config", "m1", "--toml"]).stdout).unwrap();
+    let out = dir.path().join("out");
+    let o = track(&[
+        "run",
+        s(&frames),
+        "--init",
+        DISC_INIT,
+        "--config",
+        s(&config),
+        "--tracker",
+        "m3",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = common::stderr(&o);
+    assert!(e.contains("--config") && e.contains("--tracker"), "{e}");
+    assert!(!out.exists());
+    // An unknown preset is refused by the parser with the list of presets, head included.
+    let o = track(&["run", s(&frames), "--tracker", "m9", "--out", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        common::stderr(&o).contains("head"),
+        "{}",
+        common::stderr(&o)
+    );
+}
+
+#[test]
+fn learn_clutter_names_its_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = disc_frames(dir.path(), "f", 2);
+    for (flag, name) in [("--k", "--k"), ("--lines", "--lines")] {
+        let o = track(&["learn-clutter", s(&frames), flag, "0"]);
+        assert_eq!(o.status.code(), Some(2), "{flag}");
+        let e = one_error_line(&o);
+        assert!(e.contains(name), "{e}");
+        assert!(!e.contains("setting k"), "{e}");
+    }
+}
+
+#[test]
+fn every_preset_is_listed_by_config_help() {
+    let o = track(&["config", "--help"]);
+    let help = common::stdout(&o);
+    for preset in trackers::Preset::ALL {
+        assert!(
+            help.contains(preset.name()),
+            "{} missing from:\n{help}",
+            preset.name()
+        );
+    }
+}

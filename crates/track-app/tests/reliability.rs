@@ -414,6 +414,10 @@ fn printing_commands(dir: &Path) -> Vec<Vec<String>> {
     let p = |p: &Path| p.to_str().unwrap().to_owned();
     let v = |a: &[&str]| a.iter().map(|s| (*s).to_owned()).collect::<Vec<_>>();
     vec![
+        // Help and version go to standard output like everything else.
+        v(&["--help"]),
+        v(&["run", "--help"]),
+        v(&["--version"]),
         v(&["config", "full"]),
         v(&["config", "w-eval", "--toml"]),
         vec![
