@@ -16,6 +16,8 @@
 //!   weight, log-evidence increment). The rayon path is bit-identical to the sequential one for
 //!   any number of threads: every particle draws from a generator derived from
 //!   (seed, step, particle index) ([`rng`]).
+//! - [`temper`]: adaptive tempering, the largest exponent φ ≤ 1 of the likelihood that keeps
+//!   the effective sample size above a floor.
 //! - [`estimate`]: weighted mean and covariance, maximum-weight particle, per-label mass and
 //!   label-conditional mean (Wu §4).
 //!
@@ -78,6 +80,7 @@ pub mod particles;
 pub mod resample;
 pub mod rng;
 pub mod smooth;
+pub mod temper;
 pub mod weights;
 
 // The README's example is compiled and run as a doctest, so it cannot go stale.

@@ -9,7 +9,6 @@ use dbn_switch::{StatusEstimate, TrackStatus};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use smc_core::rng::{particle_rng, resampler_rng};
-use smc_core::weights::{effective_sample_size, normalize_log_weights};
 use smc_core::{Resampler, Systematic};
 use vision_core::{BoundingBox, Ellipse};
 
@@ -27,8 +26,6 @@ use crate::{Error, Result};
 /// Most working pixels read from one frame: while the target is lost the window is the whole
 /// frame, read coarser when needed to stay under this bound.
 const MAX_WINDOW_PIXELS: f64 = 40_000.0;
-/// Bisection steps of the tempering exponent.
-const TEMPER_STEPS: usize = 30;
 /// The outer ellipse of the background ring, in target half-axes.
 const RING_OUTER: f64 = 2.0;
 /// The inner ellipse of the background ring: a margin that the target's own pixels near its
@@ -214,43 +211,6 @@ fn bbox(e: &Ellipse) -> BoundingBox {
 
 fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
     StandardNormal.sample(rng)
-}
-
-/// The exponent φ ∈ (0, 1] of the tempered weights `φ · log w`: 1 when the untempered weights
-/// keep an effective sample size of at least `min_ess`, else the largest φ that does (bisection).
-/// Normalises `log_weights` to the tempered log weights and fills `weights`.
-fn temper(
-    log_weights: &mut [f64],
-    raw: &mut Vec<f64>,
-    weights: &mut Vec<f64>,
-    min_ess: f64,
-    step: u64,
-) -> Result<f64> {
-    raw.clear();
-    raw.extend_from_slice(log_weights);
-    let raw = &*raw;
-    let apply = |phi: f64, lw: &mut [f64], w: &mut Vec<f64>| -> Result<f64> {
-        for (t, r) in lw.iter_mut().zip(raw.iter()) {
-            *t = phi * r;
-        }
-        normalize_log_weights(lw, w)
-            .map_err(|reason| Error::Smc(smc_core::Error::DegenerateWeights { step, reason }))?;
-        Ok(effective_sample_size(w))
-    };
-    if apply(1.0, log_weights, weights)? >= min_ess {
-        return Ok(1.0);
-    }
-    let (mut lo, mut hi) = (0.0, 1.0);
-    for _ in 0..TEMPER_STEPS {
-        let mid = 0.5 * (lo + hi);
-        if apply(mid, log_weights, weights)? >= min_ess {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    apply(lo, log_weights, weights)?;
-    Ok(lo)
 }
 
 impl Tracker for RegionTracker {
@@ -519,14 +479,14 @@ impl RegionTracker {
             self.log_weights.push(lw);
         }
         let n = track.particles.len();
-        temper(
+        let tempered = smc_core::temper::temper(
             &mut self.log_weights,
-            &mut self.raw_log_weights,
             &mut track.weights,
+            &mut self.raw_log_weights,
             s.min_ess_fraction * n as f64,
-            t,
-        )?;
-        Ok(effective_sample_size(&track.weights))
+        )
+        .map_err(|reason| Error::Smc(smc_core::Error::DegenerateWeights { step: t, reason }))?;
+        Ok(tempered.ess)
     }
 
     /// The estimate: the weighted mean hypothesis and its ellipse, an error when not finite.
