@@ -101,6 +101,10 @@ pub use occlusion_forms::{
 };
 pub use odobez::{OdobezLikelihood, OdobezSettings, odobez_line_log_term};
 pub use poisson::{log_poisson, poisson_neg_entropy};
+/// The `rand` crate whose `Rng` [`line_densities`] takes:
+/// import it from here (`use contour_obs::rand::Rng;`) so that an application's own `rand`, whatever its
+/// version, does not matter.
+pub use rand;
 pub use wu::{
     LineTerms, OcclusionLikelihood, WuLikelihood, WuSettings, occlusion_line_log, wu_line_terms,
 };
