@@ -95,7 +95,7 @@ pub use contour::{Contour, Template};
 pub use edges::{EdgeDetector, EdgeSettings, Polarity, detect_edges};
 pub use error::{Error, Result};
 pub use image::Bilinear;
-pub use lines::{LineSettings, MeasurementLines};
+pub use lines::{LineSettings, MAX_LINES, MeasurementLines};
 pub use occlusion_forms::{
     OcclusionForm, ReferenceLines, WuTerm, WuTermWorkspace, validate_clutter_line_fraction,
 };

@@ -174,11 +174,17 @@ fn default_init_spread() -> f64 {
 }
 
 impl TrackerConfig {
-    /// Checks every part.
+    /// Checks every part: every numeric setting against its range ([`crate::ranges`], the error
+    /// naming the setting's dotted path, as `dynamics.sigma_translation`, and the range), then
+    /// what ranges cannot say (a transition matrix whose rows sum to 1, terms that need each
+    /// other).
     ///
     /// # Errors
     /// The first invalid setting, as [`Error::InvalidSetting`] or the owning crate's error.
     pub fn validate(&self) -> Result<()> {
+        // Every numeric setting in a range that can work, named by its dotted path; the checks
+        // below then cover what a range cannot say.
+        crate::ranges::check_ranges(self)?;
         if !(1..=MAX_PARTICLES).contains(&self.particles) {
             return Err(Error::InvalidSetting {
                 name: "particles",

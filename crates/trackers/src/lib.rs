@@ -64,6 +64,7 @@ mod frame;
 mod observation;
 mod particle;
 mod proposal;
+pub mod ranges;
 mod reacquire;
 pub mod region;
 pub mod smoothing;
