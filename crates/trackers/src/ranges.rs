@@ -56,10 +56,19 @@ impl SettingRange {
         format!(
             "{}{}, {}{}",
             if self.low_inclusive { '[' } else { '(' },
-            self.low,
-            self.high,
+            number(self.low),
+            number(self.high),
             if self.high_inclusive { ']' } else { ')' }
         )
+    }
+}
+
+/// A number as a person reads it: `1e308` rather than 309 digits, `0.5` as is.
+fn number(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 
@@ -296,7 +305,7 @@ pub fn check_ranges(config: &TrackerConfig) -> Result<()> {
             .unwrap_or_default();
         let bad = match value {
             Some(v) if range.contains(v) => None,
-            Some(v) => Some(format!("{v}")),
+            Some(v) => Some(number(v)),
             None if range.optional => None,
             None => Some("not a finite number".to_owned()),
         };
@@ -460,9 +469,10 @@ mod tests {
         let mut c = Preset::M1.config(50, 1);
         c.dynamics.sigma_translation = 1e308;
         let e = c.validate().unwrap_err().to_string();
-        assert!(
-            e.contains("dynamics.sigma_translation") && e.contains("(0, 1000]"),
-            "{e}"
+        assert_eq!(
+            e,
+            "invalid tracker setting `dynamics.sigma_translation`: 1e308 is outside (0, 1000], \
+             the range that can work"
         );
         // Not-a-number and infinities (a TOML file may hold `nan` and `inf`), in a list too.
         for x in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
