@@ -17,7 +17,7 @@
 #![allow(clippy::print_stdout)]
 
 use motion_est::{ModelSpec, MotionEstimator, MotionModel, Region, Settings};
-use vision_core::GreyImage;
+use vision_core::{GreyImage, ToGreyBuffer};
 
 /// The motion of the synthetic pair, about a 2° rotation, a 3 % zoom and a shift of
 /// (1.5, −0.7) px, as [a1 … a6] about the image centre.
@@ -53,10 +53,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let [ox, oy] = estimate.origin;
     println!("origin of (x, y): ({ox:.1}, {oy:.1})");
+    // An estimate that did not converge, or that no dominant motion explains, is an error
+    // (`motion_est::Error::Unreliable`) that `?` above reports: this one is reliable.
     println!(
-        "converged {}, reliable {}, inliers {:.0} %, noise σ {:.2} grey levels",
-        estimate.converged,
-        estimate.reliable,
+        "inliers {:.0} %, noise σ {:.2} grey levels",
         100.0 * estimate.inlier_fraction,
         estimate.noise_sigma
     );
@@ -95,11 +95,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
 /// Reads an image file as grey levels 0–255, row-major.
 fn read_grey(path: &str) -> Result<(usize, usize, Vec<f32>), Box<dyn std::error::Error>> {
-    let image = image::open(path)
+    let grey = image::open(path)
         .map_err(|e| format!("{path}: {e}"))?
-        .to_luma8();
-    let (w, h) = (image.width() as usize, image.height() as usize);
-    Ok((w, h, image.pixels().map(|p| f32::from(p[0])).collect()))
+        .to_grey_buffer();
+    let (w, h) = (grey.width() as usize, grey.height() as usize);
+    Ok((w, h, grey.into_raw()))
 }
 
 /// A smooth texture, and the same texture moved by the affine `motion` about the image centre:

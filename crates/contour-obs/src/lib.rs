@@ -95,12 +95,16 @@ pub use contour::{Contour, Template};
 pub use edges::{EdgeDetector, EdgeSettings, Polarity, detect_edges};
 pub use error::{Error, Result};
 pub use image::Bilinear;
-pub use lines::{LineSettings, MeasurementLines};
+pub use lines::{LineSettings, MAX_LINES, MeasurementLines};
 pub use occlusion_forms::{
     OcclusionForm, ReferenceLines, WuTerm, WuTermWorkspace, validate_clutter_line_fraction,
 };
 pub use odobez::{OdobezLikelihood, OdobezSettings, odobez_line_log_term};
 pub use poisson::{log_poisson, poisson_neg_entropy};
+/// The `rand` crate whose `Rng` [`line_densities`] takes:
+/// import it from here (`use contour_obs::rand::Rng;`) so that an application's own `rand`, whatever its
+/// version, does not matter.
+pub use rand;
 pub use wu::{
     LineTerms, OcclusionLikelihood, WuLikelihood, WuSettings, occlusion_line_log, wu_line_terms,
 };

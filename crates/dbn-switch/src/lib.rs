@@ -66,6 +66,10 @@ pub use estimate::{argmax, class_probabilities_into};
 pub use filter::ForwardResult;
 pub use markov::{MarkovChain, ROW_SUM_TOLERANCE, validate_matrix};
 pub use occlusion::{OcclusionConfig, OcclusionEstimate, OcclusionProcess, OcclusionState};
+/// The `rand` crate whose `Rng` this crate's samplers take (`sample_next`, `sample_initial`, …):
+/// import it from here (`use dbn_switch::rand::Rng;`) so that an application's own `rand`, whatever its
+/// version, does not matter.
+pub use rand;
 pub use smooth::SmoothedChain;
 pub use status::{GammaRange, StatusConfig, StatusEstimate, StatusHmm, StatusState};
 pub use switching::SwitchingConfig;

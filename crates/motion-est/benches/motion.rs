@@ -95,6 +95,7 @@ fn bench_estimate_with_pyramids(c: &mut Criterion) {
                         None,
                         &mut bufs,
                     )
+                    .or_else(motion_est::Error::into_unreliable)
                     .unwrap()
                 })
             });
@@ -122,6 +123,7 @@ fn bench_estimate_shared_pyramids(c: &mut Criterion) {
                     None,
                     &mut ws,
                 )
+                .or_else(motion_est::Error::into_unreliable)
                 .unwrap()
             })
         });
@@ -147,6 +149,7 @@ fn bench_tracking_ellipse(c: &mut Criterion) {
                 Some(TRACK_CENTRE),
                 &mut ws,
             )
+            .or_else(motion_est::Error::into_unreliable)
             .unwrap()
         })
     });
@@ -162,6 +165,7 @@ fn bench_tracking_ellipse(c: &mut Criterion) {
                     Some(TRACK_CENTRE),
                     &mut ws,
                 )
+                .or_else(motion_est::Error::into_unreliable)
                 .unwrap()
         })
     });
@@ -177,6 +181,7 @@ fn bench_tracking_ellipse(c: &mut Criterion) {
                     Some(&WARM_GUESS),
                     &mut ws,
                 )
+                .or_else(motion_est::Error::into_unreliable)
                 .unwrap()
         })
     });

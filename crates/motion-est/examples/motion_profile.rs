@@ -53,12 +53,14 @@ fn main() {
             let times = batches(n, || {
                 black_box(
                     est.estimate_images_into(v0, v1, &Region::Full, spec, None, &mut bufs)
+                        .or_else(motion_est::Error::into_unreliable)
                         .unwrap(),
                 );
             });
             println!("full: {times}");
             let r = est
                 .estimate_images_into(v0, v1, &Region::Full, spec, None, &mut bufs)
+                .or_else(motion_est::Error::into_unreliable)
                 .unwrap();
             let h = r
                 .params
@@ -78,6 +80,7 @@ fn main() {
             let initial = (case == "warm").then_some(&WARM_GUESS[..]);
             let mut run = || {
                 est.estimate_from(&p0, &p1, &ell, spec, Some(TRACK_CENTRE), initial, &mut ws)
+                    .or_else(motion_est::Error::into_unreliable)
                     .unwrap()
             };
             let t = Instant::now();

@@ -1,5 +1,7 @@
 //! The crate's error type.
 
+use crate::MotionEstimate;
+
 /// Result alias for this crate.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
@@ -67,6 +69,17 @@ pub enum Error {
         /// The pyramid level (0 = full resolution).
         level: usize,
     },
+    /// The estimate cannot be trusted as the dominant motion of the region
+    /// ([`MotionEstimate::reliable`] is false): it did not converge at full resolution, or no
+    /// motion explains enough of the region's pixels (a compromise between motions, or the motion
+    /// of a minority). Every estimating entry point returns this instead of `Ok`, so the case
+    /// cannot be missed; the estimate is kept for diagnostics only (iterations, inlier fraction,
+    /// scale): its parameters and covariance do not describe the region's motion.
+    #[error("{}", unreliable_message(estimate))]
+    Unreliable {
+        /// The estimate, for diagnostics.
+        estimate: Box<MotionEstimate>,
+    },
     /// A parameter vector has the wrong length for its model.
     #[error("parameter vector has {got} entries, the model needs {expected}")]
     ParameterCount {
@@ -75,4 +88,45 @@ pub enum Error {
         /// Entries given.
         got: usize,
     },
+}
+
+/// Why an estimate is unreliable, in words.
+fn unreliable_message(e: &MotionEstimate) -> String {
+    if e.converged {
+        format!(
+            "unreliable motion estimate: no dominant motion could be separated (inliers {:.1} %, \
+             noise scale {:.3} grey levels)",
+            100.0 * e.inlier_fraction,
+            e.scale
+        )
+    } else {
+        format!(
+            "unreliable motion estimate: it did not converge at full resolution (iterations per \
+             level {:?})",
+            e.iterations
+        )
+    }
+}
+
+impl Error {
+    /// The unreliable estimate this error carries ([`Error::Unreliable`]), for diagnostics.
+    pub fn unreliable_estimate(&self) -> Option<&MotionEstimate> {
+        match self {
+            Error::Unreliable { estimate } => Some(estimate),
+            _ => None,
+        }
+    }
+
+    /// The estimate of an [`Error::Unreliable`] as `Ok`, any other error as it is: for a caller
+    /// that reports failed estimates too (`estimator.estimate(..).or_else(Error::into_unreliable)`),
+    /// and must then read [`MotionEstimate::reliable`] itself.
+    ///
+    /// # Errors
+    /// `self`, when it is not [`Error::Unreliable`].
+    pub fn into_unreliable(self) -> Result<MotionEstimate> {
+        match self {
+            Error::Unreliable { estimate } => Ok(*estimate),
+            other => Err(other),
+        }
+    }
 }

@@ -34,7 +34,9 @@
 //!     ModelSpec::new(MotionModel::Translation, false),
 //!     None,
 //! )?;
-//! assert!(r.converged);
+//! // An estimate that did not converge, or that no dominant motion explains, would be
+//! // `Err(Error::Unreliable { .. })`: an `Ok` estimate is a reliable one.
+//! assert!(r.converged && r.reliable);
 //! assert!((r.params[0] - 1.5).abs() < 0.01 && (r.params[1] + 0.75).abs() < 0.01);
 //! # Ok::<(), motion_est::Error>(())
 //! ```

@@ -264,6 +264,8 @@ fn estimate_block(
             ModelSpec::new(MotionModel::Affine, false),
             Some(g.centre),
         )
+        // A flagged (unreliable) estimate is an error that carries it; the tally counts both.
+        .or_else(motion_est::Error::into_unreliable)
         .unwrap();
     let e = mean_corner_error(&r, &g.warp, g.corners);
     let eb = mean_corner_error(

@@ -138,8 +138,8 @@ pub struct StepDiagnostics {
 /// # Examples
 /// A bootstrap filter for a 1-D random walk observed in Gaussian noise:
 /// ```
-/// use rand::Rng;
-/// use rand_distr::{Distribution, StandardNormal};
+/// use smc_core::rand::Rng;
+/// use smc_core::rand_distr::{Distribution, StandardNormal};
 /// use smc_core::model::{Dynamics, FnObservation};
 /// use smc_core::{FilterSettings, ParticleFilter, ParticleSet, ResamplingScheme};
 ///

@@ -34,8 +34,9 @@
 //! # Example
 //! A bootstrap filter for x_k = 0.9 x_{k−1} + N(0, 1), z_k = x_k + N(0, 1):
 //! ```
-//! use rand::Rng;
-//! use rand_distr::{Distribution, StandardNormal};
+//! // The generator traits come from smc-core's own `rand`, whatever version an application uses.
+//! use smc_core::rand::Rng;
+//! use smc_core::rand_distr::{Distribution, StandardNormal};
 //! use smc_core::model::{Dynamics, FnObservation};
 //! use smc_core::{FilterSettings, ParticleFilter, ParticleSet, ResamplingScheme};
 //!
@@ -87,6 +88,14 @@ pub mod weights;
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 mod readme_doctest {}
+
+/// The `rand` crate that [`Dynamics::sample`], [`Proposal::sample`] and the resamplers take their
+/// generators from. A model implemented against another version of `rand` (a `cargo add rand`
+/// may pick a newer one) does not compile: import `Rng` from here, `use smc_core::rand::Rng;`.
+pub use rand;
+/// The `rand_distr` crate of the same `rand` version ([`rand`]), for the noise of a model:
+/// `use smc_core::rand_distr::{Distribution, StandardNormal};`.
+pub use rand_distr;
 
 pub use error::{Degeneracy, Error, Result};
 pub use estimate::{AsVector, LabelEstimate, MeanCovariance};

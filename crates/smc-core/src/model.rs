@@ -153,7 +153,7 @@ pub trait TransitionDensity: Sync {
 /// # struct Walk;
 /// # impl Dynamics for Walk {
 /// #     type State = f64;
-/// #     fn sample<R: rand::Rng + ?Sized>(&self, x: &f64, _: &mut R) -> f64 { *x }
+/// #     fn sample<R: smc_core::rand::Rng + ?Sized>(&self, x: &f64, _: &mut R) -> f64 { *x }
 /// #     fn log_density(&self, x: &f64, y: &f64) -> f64 { -0.5 * (y - x).powi(2) }
 /// # }
 /// let density = PriorDensity { dynamics: &Walk, log_bound: Some(0.0) };

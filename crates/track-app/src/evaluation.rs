@@ -5,10 +5,10 @@
 use rayon::prelude::*;
 use scene_synth::{FrameTruth, Scenario, ScenarioParams, Scene};
 use trackers::{Preset, SmootherSettings, SwitchingStatistics, TrackerConfig};
-use vision_core::{BoundingBox, Ellipse, first_failure};
+use vision_core::{BoundingBox, Ellipse, ToGreyBuffer, first_failure};
 
 use crate::record::FrameRecord;
-use crate::sequence::{Frame, Original, grey_from_luma8};
+use crate::sequence::{Frame, Original};
 use crate::session::{DrawOptions, Session, SessionOutput};
 use crate::{AppError, Result};
 
@@ -58,7 +58,7 @@ impl SyntheticSequence {
             out.frames.push(Frame {
                 index: k,
                 name: format!("{}#{}", out.name, k + 1),
-                grey: grey_from_luma8(&img),
+                grey: img.to_grey_buffer(),
                 original: Original::Luma(img),
             });
             out.truth.push(truth);

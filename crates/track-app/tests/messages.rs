@@ -104,6 +104,10 @@ fn configuration_files_that_do_not_parse_or_hold_bad_values_are_both_exit_2() {
     let good: serde_json::Value = serde_json::from_slice(&track(&["config", "m1"]).stdout).unwrap();
     let mut zero = good.clone();
     zero["particles"] = 0.into();
+    // Issue 28: a translation noise that passed validation and failed at frame 1 ("estimated
+    // contour is not finite") is refused up front, by its dotted path and range.
+    let mut wild = good.clone();
+    wild["dynamics"]["sigma_translation"] = 1e308.into();
     let cases = [
         (
             "broken.json",
@@ -112,6 +116,12 @@ fn configuration_files_that_do_not_parse_or_hold_bad_values_are_both_exit_2() {
         ),
         ("broken.toml", "particles = [".to_owned(), "invalid TOML"),
         ("zero.json", zero.to_string(), "particles"),
+        (
+            "wild.json",
+            wild.to_string(),
+            "dynamics.sigma_translation`: 1e308 is outside (0, 1000]",
+        ),
+
         ("missing.json", String::new(), "cannot read"),
     ];
     for (name, text, what) in cases {

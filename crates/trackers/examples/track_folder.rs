@@ -4,16 +4,16 @@
 //! cargo run --release -p trackers --example track_folder -- FOLDER x,y,w,h [PRESET]
 //! ```
 //!
-//! reads the images of FOLDER in name order (any format the `image` crate reads), starts the
-//! preset (default `head`) from the box x,y,w,h on the first one and prints one line per frame:
+//! reads the images of FOLDER (any format the `image` crate reads) in the natural order of their
+//! names (`2.png` before `10.png`, as `track run`), starts the preset (default `head`) from the
+//! box x,y,w,h on the first one and prints one line per frame:
 //! the box, and the status probabilities where the tracker has them. Without arguments it writes
 //! a short synthetic sequence into a temporary folder and tracks that, so the example runs as is.
 //! The `track` command line does the same with every output a user needs (`track run`).
 
 use std::path::{Path, PathBuf};
 
-use trackers::{Frame, Preset, build};
-use vision_core::Ellipse;
+use trackers::{Ellipse, FrameBuf, Preset, build};
 
 type Failure = Box<dyn std::error::Error>;
 
@@ -39,7 +39,8 @@ fn main() -> Result<(), Failure> {
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.is_file())
         .collect();
-    paths.sort();
+    // Natural order, as `track run` reads a folder: 2.png before 10.png.
+    vision_core::sort_natural(&mut paths);
     let mut tracker = build(preset.config(200, 1))?;
     let [x, y, w, h] = init;
     let start = Ellipse {
@@ -50,13 +51,10 @@ fn main() -> Result<(), Failure> {
         angle: 0.0,
     };
     for (k, path) in paths.iter().enumerate() {
-        let rgb = image::open(path)?.to_rgb8();
-        let (width, height) = (rgb.width() as usize, rgb.height() as usize);
-        let grey: Vec<f32> = rgb
-            .pixels()
-            .map(|p| 0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2]))
-            .collect();
-        let frame = Frame::with_rgb(width, height, &grey, rgb.as_raw())?;
+        // Colour images keep their RGB pixels (head reads colour); grey levels 0–255 come from
+        // the BT.601 luma weights, as in `track run`.
+        let owned = FrameBuf::from(&image::open(path)?);
+        let frame = owned.frame()?;
         let estimate = if k == 0 {
             tracker.init(frame, start)?
         } else {
@@ -106,7 +104,8 @@ fn synthetic_sequence() -> Result<PathBuf, Failure> {
                 image::Rgb([30, 40, 50])
             }
         });
-        img.save(dir.join(format!("{:04}.png", k + 1)))?;
+        // Unpadded numbers (1.png … 12.png): read in natural order, not as 1, 10, 11, 12, 2, ….
+        img.save(dir.join(format!("{}.png", k + 1)))?;
     }
     Ok(dir)
 }

@@ -12,6 +12,7 @@ use crate::region::RegionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
 use contour_obs::OcclusionForm;
+use vision_core::Ellipse;
 
 /// Settings of Odobez's motion proposal (Eq. 16) and of the motion estimates behind p_c1.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -173,11 +174,17 @@ fn default_init_spread() -> f64 {
 }
 
 impl TrackerConfig {
-    /// Checks every part.
+    /// Checks every part: every numeric setting against its range ([`crate::ranges`], the error
+    /// naming the setting's dotted path, as `dynamics.sigma_translation`, and the range), then
+    /// what ranges cannot say (a transition matrix whose rows sum to 1, terms that need each
+    /// other).
     ///
     /// # Errors
     /// The first invalid setting, as [`Error::InvalidSetting`] or the owning crate's error.
     pub fn validate(&self) -> Result<()> {
+        // Every numeric setting in a range that can work, named by its dotted path; the checks
+        // below then cover what a range cannot say.
+        crate::ranges::check_ranges(self)?;
         if !(1..=MAX_PARTICLES).contains(&self.particles) {
             return Err(Error::InvalidSetting {
                 name: "particles",
@@ -261,6 +268,64 @@ impl TrackerConfig {
         Ok(())
     }
 
+    /// Whether the tracker follows rotated contours: the affine shape space of Wu's trackers
+    /// (`w-*`). Odobez's space (`m1`, `m2`, `m3`, `full`) and the region tracker (`head`) track
+    /// axis-aligned ellipses.
+    pub fn rotates(&self) -> bool {
+        self.region.is_none() && self.space == ShapeSpace::Affine
+    }
+
+    /// The ellipse `e` as this configuration's tracker starts from it, exactly; every tracker's
+    /// `init` goes through it, so a library user and the command line get the same answer.
+    ///
+    /// A tracker that [rotates](Self::rotates) takes any ellipse. The others take an ellipse at a
+    /// multiple of π/2 (within [`AXIS_ANGLE_TOLERANCE`]), written at angle 0 with the semi-axes
+    /// swapped at odd multiples, and a circle at any angle (the same circle). Any other angle
+    /// cannot be represented (`m1` would start from the rotated ellipse's bounding ellipse, `head`
+    /// would drop the angle), so it is refused rather than silently changed.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] named `initial ellipse`: a value that is not finite, a semi-axis
+    /// that is not positive, or a rotated, non-circular ellipse for a tracker that cannot rotate.
+    ///
+    /// # Examples
+    /// ```
+    /// use trackers::{Ellipse, Preset};
+    ///
+    /// let m1 = Preset::M1.config(100, 1);
+    /// let quarter = Ellipse::new(50.0, 40.0, 20.0, 10.0, std::f64::consts::FRAC_PI_2);
+    /// assert_eq!(m1.initial_ellipse(&quarter)?, Ellipse::new(50.0, 40.0, 10.0, 20.0, 0.0));
+    /// assert!(m1.initial_ellipse(&Ellipse::new(50.0, 40.0, 20.0, 10.0, 0.7)).is_err());
+    /// let tilted = Ellipse::new(50.0, 40.0, 20.0, 10.0, 0.7);
+    /// assert_eq!(Preset::WFixed.config(100, 1).initial_ellipse(&tilted)?, tilted);
+    /// # Ok::<(), trackers::Error>(())
+    /// ```
+    pub fn initial_ellipse(&self, e: &Ellipse) -> Result<Ellipse> {
+        crate::tracker::check_initial(e)?;
+        if self.rotates() {
+            return Ok(*e);
+        }
+        if e.a == e.b {
+            return Ok(Ellipse::new(e.cx, e.cy, e.a, e.b, 0.0));
+        }
+        let quarter = std::f64::consts::FRAC_PI_2;
+        let k = (e.angle / quarter).round();
+        if (e.angle - k * quarter).abs() <= AXIS_ANGLE_TOLERANCE {
+            let odd = k.rem_euclid(2.0) == 1.0;
+            let (a, b) = if odd { (e.b, e.a) } else { (e.a, e.b) };
+            return Ok(Ellipse::new(e.cx, e.cy, a, b, 0.0));
+        }
+        Err(Error::InvalidSetting {
+            name: "initial ellipse",
+            reason: format!(
+                "the {} tracker follows axis-aligned ellipses only, so it cannot start from an \
+                 ellipse at angle {} rad; give an angle that is a multiple of π/2 (or a box), or \
+                 use a tracker that rotates (w-fixed, w-switch, w-hmm, w-occ, w-eval)",
+                self.name, e.angle
+            ),
+        })
+    }
+
     /// Whether motion must be estimated every frame.
     pub fn needs_motion(&self) -> bool {
         self.proposal == ProposalKind::Motion || self.likelihood.motion_consistency
@@ -305,6 +370,11 @@ pub const OCCLUSION_ARC: bool = true;
 /// `distractor` scene, where a larger σ_γ lets γ explain the mismatch of a zooming target
 /// (docs/RESULTS.md, decision log).
 pub const W_OCC_SIGMA_GAMMA: f64 = 0.3;
+
+/// Largest difference, in radians, between the angle of an initial ellipse and a multiple of π/2
+/// that a tracker of axis-aligned ellipses accepts as that multiple (angles typed to six
+/// decimals); see [`TrackerConfig::initial_ellipse`].
+pub const AXIS_ANGLE_TOLERANCE: f64 = 1e-6;
 
 /// Most particles a configuration may ask for: beyond this a frame takes seconds and the
 /// particle sets gigabytes, which is never what a tracker needs.

@@ -23,6 +23,18 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
+    /// A frame's RGB pixels do not match its size.
+    #[error("{got} RGB bytes for a {width}x{height} frame (expected {expected}: 3 per pixel)")]
+    RgbSize {
+        /// Frame width.
+        width: usize,
+        /// Frame height.
+        height: usize,
+        /// `3 · width · height`.
+        expected: usize,
+        /// Bytes given.
+        got: usize,
+    },
     /// `update` was called before `init`.
     #[error("the tracker was not initialised: call init() with the first frame")]
     NotInitialised,

@@ -64,6 +64,7 @@ mod frame;
 mod observation;
 mod particle;
 mod proposal;
+pub mod ranges;
 mod reacquire;
 pub mod region;
 pub mod smoothing;
@@ -73,13 +74,14 @@ mod visibility;
 pub mod working_scale;
 
 pub use config::{
-    CLUTTER_LINE_FRACTION, ClutterMode, MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings,
-    OCCLUSION_ARC, OcclusionMode, PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION,
-    TrackerConfig, UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA,
+    AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, ClutterMode, MAX_CLUSTER_ITERATIONS,
+    MAX_PARTICLES, MotionSettings, OCCLUSION_ARC, OcclusionMode, PoseEstimator, Preset,
+    ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig, UNKNOWN_OCCLUDER_SHARE,
+    W_OCC_SIGMA_GAMMA,
 };
 pub use dynamics::{DynamicsSettings, NoiseKind};
 pub use error::{Error, Result};
-pub use frame::Frame;
+pub use frame::{Frame, FrameBuf};
 pub use observation::{ImplicitMotionSettings, LikelihoodSettings};
 pub use particle::Particle;
 pub use reacquire::ReacquisitionSettings;
@@ -89,6 +91,21 @@ pub use smoothing::{ChainCounts, SmoothedRun, SwitchingStatistics};
 pub use space::{STATE_SLOTS, ShapeSpace, StateVector};
 pub use tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, build};
 pub use working_scale::{ScaledTracker, WorkingScale};
+
+// The types of `Estimate`'s public fields, and of a tracker's inputs, so that a user needs no
+// other crate of the workspace to read what a tracker reports.
+pub use dbn_switch::{ClutterEstimate, StatusEstimate};
+pub use smc_core::StepDiagnostics;
+pub use vision_core::{BoundingBox, Ellipse, GreyBuffer, GreyImage, ToGreyBuffer, TrackStatus};
+
+/// What a program that runs a tracker needs, in one import: `use trackers::prelude::*;`.
+pub mod prelude {
+    pub use crate::{
+        BoundingBox, ClutterEstimate, Ellipse, Estimate, Frame, FrameBuf, GreyImage, Preset,
+        StatusEstimate, StepDiagnostics, ToGreyBuffer, TrackStatus, Tracker, TrackerConfig, build,
+        build_preset,
+    };
+}
 
 /// Builds a preset by name with `particles` particles and `seed`.
 ///

@@ -390,10 +390,10 @@ impl ParticleTracker {
                         warm.as_deref(),
                         &mut self.motion_workspace,
                     )
-                    .ok()
-                    // An estimate that could not separate the dominant motion from the rest is a
-                    // failed estimate: the cluster falls back to the prior prediction.
-                    .filter(|est| est.reliable)?;
+                    // An estimate that could not separate the dominant motion from the rest is an
+                    // error (`motion_est::Error::Unreliable`), as is any other failure: the
+                    // cluster falls back to the prior prediction.
+                    .ok()?;
                 if self.config.motion.warm_start && est.converged {
                     warm = Some(est.params.clone());
                 }
@@ -557,6 +557,11 @@ impl ParticleTracker {
             && status.is_none_or(|s| s.alpha_hat == dbn_switch::TrackStatus::Locked)
     }
 
+    /// The index of the last frame processed (0 after `init`).
+    pub(crate) fn frames_done(&self) -> usize {
+        self.frame
+    }
+
     fn check_frame(&self, frame: &Frame<'_>) -> Result<()> {
         if (frame.width(), frame.height()) != self.size {
             return Err(Error::BadFrame {
@@ -585,7 +590,9 @@ impl Tracker for ParticleTracker {
 
     fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate> {
         let start = Instant::now();
-        check_initial(&ellipse)?;
+        // Exactly what the shape space can represent, or an error (a rotated ellipse for a
+        // tracker of axis-aligned ones).
+        let ellipse = self.config.initial_ellipse(&ellipse)?;
         let space = self.config.space;
         let centre = space.from_ellipse(&ellipse);
         let s0 = space.scale(&centre);

@@ -21,7 +21,7 @@ use crate::config::TrackerConfig;
 use crate::frame::Frame;
 use crate::smoothing::SmoothedRun;
 use crate::space::ShapeSpace;
-use crate::tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, check_initial};
+use crate::tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse};
 use crate::{Error, Result};
 
 /// The map between a frame's pixel coordinates and the working frame's: a frame pixel's
@@ -233,7 +233,8 @@ impl ScaledTracker {
         let (w, h) = self.shrinker.size;
         if (frame.width(), frame.height()) != (w, h) {
             return Err(Error::BadFrame {
-                frame: 0,
+                // Only updates can meet a frame of another size (init sets the size).
+                frame: self.inner.frames_done() + 1,
                 reason: format!(
                     "{}×{} differs from the first frame's {w}×{h}",
                     frame.width(),
@@ -260,7 +261,7 @@ impl Tracker for ScaledTracker {
     }
 
     fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate> {
-        check_initial(&ellipse)?;
+        let ellipse = self.inner.config().initial_ellipse(&ellipse)?;
         self.scale = match self.inner.config().working_radius {
             Some(r) => WorkingScale::for_target(&ellipse, r),
             None => WorkingScale::IDENTITY,

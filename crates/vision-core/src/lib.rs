@@ -5,12 +5,16 @@
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod convert;
 mod error;
 mod geometry;
 mod image;
+mod order;
 mod status;
 
+pub use convert::{ToGreyBuffer, grey_from_unit_range};
 pub use error::{Error, Result};
 pub use geometry::{BoundingBox, Ellipse};
 pub use image::{GreyBuffer, GreyImage};
+pub use order::sort_natural;
 pub use status::{FAILURE_IOU, FAILURE_RUN, TrackStatus, first_failure};

@@ -46,7 +46,13 @@ impl MeasurementLines {
             } else {
                 (1u64 << width) - 1
             };
-            ones << (half - kn)
+            // Lines longer than the fast scan's 64 samples take the general path, which does not
+            // read the window; their bits would fall off the word (a shift overflow, found with
+            // 1000 px lines), so they get none.
+            u32::try_from(half - kn)
+                .ok()
+                .and_then(|shift| ones.checked_shl(shift))
+                .unwrap_or(0)
         }
     }
 

@@ -30,7 +30,9 @@ pub struct MotionEstimate {
     pub inlier_fraction: f64,
     /// Gauss–Newton iterations per level, index 0 = full resolution; 0 for levels not used.
     pub iterations: Vec<usize>,
-    /// Whether the full-resolution iterations met the tolerance.
+    /// Whether the full-resolution iterations met the tolerance. Always true in an `Ok` result
+    /// of the estimator (a reliable estimate converged); false only in the estimate that
+    /// [`Error::Unreliable`](crate::Error::Unreliable) carries.
     pub converged: bool,
     /// Whether the estimate can be trusted as the dominant motion of the region: it
     /// [`converged`](Self::converged), the pixels it explains at the noise scale are at least
@@ -43,7 +45,8 @@ pub struct MotionEstimate {
     /// that a surface in front of it covers in the second frame. `false` when the dominant
     /// motion could not be separated from the rest (a compromise between motions, or a motion
     /// of a minority): treat the estimate as failed; its parameters and covariance do not
-    /// describe the region's motion.
+    /// describe the region's motion. The estimator returns such an estimate only inside
+    /// [`Error::Unreliable`](crate::Error::Unreliable), never as `Ok`.
     #[serde(default)]
     pub reliable: bool,
 }

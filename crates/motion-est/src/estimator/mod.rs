@@ -196,9 +196,9 @@ impl MotionEstimator {
     /// every region). `origin` defaults to [`Region::centre`]. The same as
     /// [`estimate_request`](Self::estimate_request) with a cold start.
     ///
-    /// Non-convergence is reported in [`MotionEstimate::converged`], not as an error.
-    ///
     /// # Errors
+    /// [`Error::Unreliable`], carrying the estimate, when it is not
+    /// [reliable](MotionEstimate::reliable) (among others, when it did not converge);
     /// [`Error::PyramidMismatch`] when the pyramids come from different image sizes or smoothing,
     /// region errors, [`Error::NonFinite`] for a NaN origin, [`Error::RegionTooSmall`] when fewer
     /// than `spec.len() + 1` pixels remain usable at full resolution, [`Error::Degenerate`] when the
@@ -295,6 +295,18 @@ impl MotionEstimator {
             p0: pyramid0,
             p1: pyramid1,
         };
-        on_pool(large, || self.estimate_here(frames, request, ws))
+        on_pool(large, || self.estimate_here(frames, request, ws)).and_then(reliable_only)
+    }
+}
+
+/// `Ok` only for a [reliable](MotionEstimate::reliable) estimate; [`Error::Unreliable`] with the
+/// estimate otherwise.
+fn reliable_only(estimate: MotionEstimate) -> Result<MotionEstimate> {
+    if estimate.reliable {
+        Ok(estimate)
+    } else {
+        Err(Error::Unreliable {
+            estimate: Box::new(estimate),
+        })
     }
 }

@@ -199,7 +199,11 @@ fn non_convergence_is_a_status_not_an_error() {
             ModelSpec::new(MotionModel::Affine, false),
             None,
         )
-        .unwrap();
+        .unwrap_err();
+    // An estimate that did not converge is an error, never `Ok`; it carries the estimate.
+    let message = r.to_string();
+    assert!(message.contains("did not converge"), "{message}");
+    let r = r.into_unreliable().unwrap();
     assert!(!r.converged && !r.reliable);
     // The starting hypotheses' iterations are counted too.
     assert!(r.iterations.len() == 1 && r.iterations[0] >= 2, "{r:?}");

@@ -50,8 +50,8 @@
 //! # Example
 //! Smoothing a bootstrap filter on x_k = 0.9 x_{k−1} + N(0, 1), z_k = x_k + N(0, 1):
 //! ```
-//! use rand::Rng;
-//! use rand_distr::{Distribution, StandardNormal};
+//! use smc_core::rand::Rng;
+//! use smc_core::rand_distr::{Distribution, StandardNormal};
 //! use smc_core::model::{Dynamics, FnObservation, PriorDensity};
 //! use smc_core::smooth::{SmootherSettings, sample_trajectories, smooth_marginals};
 //! use smc_core::{FilterSettings, HistorySettings, ParticleFilter, ParticleSet, ResamplingScheme};

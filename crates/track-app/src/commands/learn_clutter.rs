@@ -111,13 +111,12 @@ pub fn run(args: &Args) -> Result<()> {
     }
 }
 
-/// Loads an image as row-major grey f32 in 0–255 grey levels.
+/// Loads an image as row-major grey f32 in 0–255 grey levels, as `track run` reads it
+/// ([`vision_core::ToGreyBuffer`]).
 fn load_grey(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
-    let img = crate::sequence::decode_image(path)?;
-    let grey = img.to_luma32f();
+    let grey = vision_core::ToGreyBuffer::to_grey_buffer(&crate::sequence::decode_image(path)?);
     let (w, h) = grey.dimensions();
-    let data = grey.into_raw().into_iter().map(|v| v * 255.0).collect();
-    Ok((w as usize, h as usize, data))
+    Ok((w as usize, h as usize, grey.into_raw()))
 }
 
 #[cfg(test)]

@@ -173,6 +173,9 @@ pub fn run(args: &Args) -> Result<()> {
     let start = Instant::now();
     let est = estimator
         .estimate_images(view0, view1, &region, spec, origin)
+        // An unreliable estimate is motion-est's error carrying the estimate: taken back here so
+        // that `assess` reports why, and the JSON failure object has its diagnostics.
+        .or_else(motion_est::Error::into_unreliable)
         .map_err(|e| match e {
             motion_est::Error::InvalidSetting { name, .. } => {
                 AppError::setting(name, e.to_string())

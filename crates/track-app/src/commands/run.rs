@@ -259,46 +259,23 @@ fn load_config(path: &Path) -> Result<TrackerConfig> {
 }
 
 /// Largest difference, in radians, between an `--init-ellipse` angle and a multiple of π/2 that
-/// an axis-aligned tracker accepts as that multiple (angles typed to six decimals).
-pub const AXIS_ANGLE_TOLERANCE: f64 = 1e-6;
+/// an axis-aligned tracker accepts as that multiple (the library's constant).
+pub use trackers::AXIS_ANGLE_TOLERANCE;
 
-/// The ellipse `e` as the tracker of `config` can start from it, exactly.
-///
-/// Trackers in the affine shape space (`w-*`) represent any rotation. The others — Odobez's
-/// space (`m1`, `m2`, `m3`, `full`) and the region tracker (`head`) — track axis-aligned
-/// ellipses: an ellipse at a multiple of π/2 is written at angle 0 (the semi-axes swapped at odd
-/// multiples) and a circle at any angle is the same circle; any other angle cannot be represented
-/// (`m1` would start from the rotated ellipse's bounding ellipse, `head` would drop the angle), so
-/// it is refused rather than silently changed.
+/// The ellipse `e` as the tracker of `config` can start from it, exactly: the library's
+/// [`TrackerConfig::initial_ellipse`] (a rotated ellipse is refused by trackers of axis-aligned
+/// ellipses), checked here so that the error names the option.
 ///
 /// # Errors
 /// [`AppError::InvalidSetting`] naming `--init-ellipse` for a rotated, non-circular ellipse and a
 /// tracker that cannot rotate.
 pub fn initial_ellipse_for(e: &Ellipse, config: &TrackerConfig) -> Result<Ellipse> {
-    let rotates = config.region.is_none() && config.space == trackers::ShapeSpace::Affine;
-    if rotates {
-        return Ok(*e);
-    }
-    if e.a == e.b {
-        return Ok(Ellipse::new(e.cx, e.cy, e.a, e.b, 0.0));
-    }
-    let quarter = std::f64::consts::FRAC_PI_2;
-    let k = (e.angle / quarter).round();
-    if (e.angle - k * quarter).abs() <= AXIS_ANGLE_TOLERANCE {
-        let odd = k.rem_euclid(2.0) == 1.0;
-        let (a, b) = if odd { (e.b, e.a) } else { (e.a, e.b) };
-        return Ok(Ellipse::new(e.cx, e.cy, a, b, 0.0));
-    }
-    Err(AppError::setting(
-        "--init-ellipse",
-        format!(
-            "the {} tracker follows axis-aligned ellipses only, so it cannot start from an \
-             ellipse at angle {} rad; give an angle that is a multiple of π/2 (or --init x,y,w,h), \
-             or use a tracker that rotates (w-fixed, w-switch, w-hmm, w-occ, w-eval)",
-            config.name,
-            crate::groundtruth::fmt_num(e.angle)
-        ),
-    ))
+    config.initial_ellipse(e).map_err(|err| match err {
+        trackers::Error::InvalidSetting { reason, .. } => {
+            AppError::setting("--init-ellipse", reason)
+        }
+        other => AppError::setting("--init-ellipse", other.to_string()),
+    })
 }
 
 /// A progress bar on standard error, hidden when `quiet`.

@@ -3,7 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{Frame, FrameSource, Original, SequenceInfo, grey_from_luma8, grey_from_rgb8};
+use vision_core::ToGreyBuffer;
+
+use super::{Frame, FrameSource, Original, SequenceInfo};
 use crate::{AppError, Result};
 
 /// A folder of images (PNG, JPEG, GIF, BMP, WebP, TIFF), read in the natural order of their
@@ -32,15 +34,9 @@ fn supported_extensions() -> String {
     IMAGE_EXTENSIONS.map(|e| format!(".{e}")).join(", ")
 }
 
-/// Sorts frame files in natural order of their names: runs of digits compare by value, so
-/// `2.png` comes before `10.png` (as image viewers and ffmpeg's `%d` patterns number frames),
-/// and zero-padded names (`0001.png`) keep their order. Uses the `alphanumeric-sort` crate,
-/// which compares names that are not UTF-8 too.
-pub fn sort_natural(paths: &mut [PathBuf]) {
-    alphanumeric_sort::sort_slice_by_os_str_key(paths, |p: &PathBuf| {
-        p.file_name().unwrap_or(p.as_os_str())
-    });
-}
+/// Sorts frame files in natural order of their names (`2.png` before `10.png`): the order
+/// every reader of a folder shares, from vision-core.
+pub use vision_core::sort_natural;
 
 impl ImageFolder {
     /// Lists the image files ([`IMAGE_EXTENSIONS`], any case) in `folder`, sorted in natural
@@ -207,8 +203,8 @@ impl FrameSource for ImageFolder {
         };
         let (original, _) = Self::decode_checked(&path, &mut self.first)?;
         let grey = match &original {
-            Original::Rgb(img) => grey_from_rgb8(img),
-            Original::Luma(img) => grey_from_luma8(img),
+            Original::Rgb(img) => img.to_grey_buffer(),
+            Original::Luma(img) => img.to_grey_buffer(),
         };
         let index = self.next;
         self.next += 1;

@@ -1,7 +1,9 @@
 //! Frame sources: a folder of images, an OTB folder, a `.y4m` file, or Y4M on standard input.
 //!
 //! Every source yields frames one at a time as a grey `f32` image in 0–255 grey levels (what the
-//! libraries consume) together with the 8-bit original (RGB or luma) for rendering overlays.
+//! libraries consume) together with the 8-bit original (RGB or luma) for rendering overlays. Image
+//! files get their grey levels from vision-core's [`vision_core::ToGreyBuffer`] (BT.601 luma for
+//! colour, the weighting of a Y4M luma plane), the one conversion the libraries offer too.
 //!
 //! Bad input fails with one line that names the file and the problem. So that a run can fail
 //! *before* it writes any output when, say, the 300th image is corrupt, every source has
@@ -30,30 +32,13 @@ mod y4m;
 
 use std::path::{Path, PathBuf};
 
-use image::{GrayImage, Luma, RgbImage};
+use image::{GrayImage, RgbImage};
 use vision_core::GreyBuffer;
 
 use crate::{AppError, Result};
 
 pub use folder::{IMAGE_EXTENSIONS, ImageFolder, decode_image, sort_natural};
 pub use y4m::{MAX_PIXELS, MAX_SIDE, Y4mColour, Y4mHeader, Y4mSource};
-
-/// An 8-bit grey image as the workspace's grey frame (grey levels 0–255 as f32).
-pub fn grey_from_luma8(img: &GrayImage) -> GreyBuffer {
-    GreyBuffer::from_fn(img.width(), img.height(), |x, y| {
-        Luma([f32::from(img.get_pixel(x, y)[0])])
-    })
-}
-
-/// An 8-bit RGB image as the workspace's grey frame, with the ITU-R BT.601 luma weights
-/// (0.299 R + 0.587 G + 0.114 B), the same weighting as the luma plane of a Y4M video, so both
-/// kinds of input give the trackers the same grey levels.
-pub fn grey_from_rgb8(img: &RgbImage) -> GreyBuffer {
-    GreyBuffer::from_fn(img.width(), img.height(), |x, y| {
-        let p = img.get_pixel(x, y);
-        Luma([0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2])])
-    })
-}
 
 /// The 8-bit original of a frame, kept for drawing overlays.
 #[derive(Debug, Clone, PartialEq)]

@@ -20,7 +20,7 @@ use super::window::WorkingWindow;
 use crate::config::TrackerConfig;
 use crate::frame::Frame;
 use crate::space::STATE_SLOTS;
-use crate::tracker::{Estimate, Tracker, WeightedEllipse, check_initial};
+use crate::tracker::{Estimate, Tracker, WeightedEllipse};
 use crate::{Error, Result};
 
 /// Most working pixels read from one frame: while the target is lost the window is the whole
@@ -224,11 +224,8 @@ impl Tracker for RegionTracker {
 
     fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate> {
         let start = Instant::now();
-        check_initial(&ellipse)?;
-        let e = Ellipse {
-            angle: 0.0,
-            ..ellipse
-        };
+        // Axis-aligned: a rotated ellipse is refused, a quarter turn written at angle 0.
+        let e = self.config.initial_ellipse(&ellipse)?;
         let bins = self.bins(&frame);
         self.read_window(&frame, &bins, [e.cx, e.cy], (e.a, e.b), false);
         let (target, background) = self.histograms(bins.len(), &e);
