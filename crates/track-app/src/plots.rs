@@ -793,6 +793,77 @@ mod tests {
     }
 
     #[test]
+    fn the_region_trackers_p_lost_is_no_occlusion_and_it_has_no_partial_state() {
+        let head = PlotOptions::of_tracker(&trackers::Preset::Head.config(50, 1));
+        let mut rs = records(false);
+        for r in &mut rs {
+            // What the region tracker records: γ̂ = P(lost) and P(partial) = 0.
+            r.gamma_hat = Some(0.1);
+            r.alpha_hat = Some(TrackStatus::Locked);
+            r.alpha_probs = vec![0.9, 0.0, 0.1];
+        }
+        let figs = all_figures_with(&rs, None, &head).unwrap();
+        let names: Vec<&str> = figs.iter().map(|f| f.name).collect();
+        assert_eq!(names, ["alpha", "ess"]);
+        assert!(!figs[0].svg.contains("P(partial)"), "P(partial) drawn");
+        assert!(figs[0].svg.contains("P(locked)") && figs[0].svg.contains("P(lost)"));
+        // The contour trackers keep both.
+        let full = PlotOptions::of_tracker(&trackers::Preset::Full.config(50, 1));
+        let figs = all_figures_with(&rs, None, &full).unwrap();
+        assert!(figs.iter().any(|f| f.name == "gamma"));
+        assert!(figs.iter().any(|f| f.svg.contains("P(partial)")));
+    }
+
+    #[test]
+    fn iou_over_time_and_truth_curves_are_drawn_where_the_truth_is_known() {
+        let rs = records(true);
+        // The box of every record is (40, 42, 20, 16); the truth is that box on even frames,
+        // nothing on odd ones, and the hidden values of a scene on every frame.
+        let truth: Vec<TruthAt> = (0..40)
+            .map(|i| TruthAt {
+                bbox: (i % 2 == 0).then(|| BoundingBox::new(40.0, 42.0, 20.0, 16.0)),
+                beta: Some(1),
+                lambda: Some(0.05),
+                gamma: Some(0.0),
+                alpha: Some(TrackStatus::Locked),
+            })
+            .collect();
+        let options = PlotOptions::default().with_truth(truth);
+        let figs = all_figures_with(&rs, None, &options).unwrap();
+        let names: Vec<&str> = figs.iter().map(|f| f.name).collect();
+        assert_eq!(names, ["beta", "lambda", "gamma", "alpha", "iou", "ess"]);
+        let iou = &figs[4].svg;
+        assert!(iou.contains("IoU"));
+        // 20 labelled frames: one polyline of 20 points at IoU 1 (the top of the y range).
+        let counts: Vec<usize> = iou
+            .split("<polyline")
+            .skip(1)
+            .filter_map(|l| l.split("points=\"").nth(1)?.split('"').next())
+            .map(|p| p.split_whitespace().count())
+            .collect();
+        assert!(counts.contains(&20), "{counts:?}");
+        for (f, label) in [
+            (0, "true class"),
+            (1, "true edge density"),
+            (2, "true occluded fraction"),
+            (3, "true status"),
+        ] {
+            assert!(
+                figs[f].svg.contains(label),
+                "{} lacks {label}",
+                figs[f].name
+            );
+        }
+        // Without truth: no IoU figure, no truth curve.
+        let plain = all_figures(&rs, None).unwrap();
+        assert!(
+            plain
+                .iter()
+                .all(|f| f.name != "iou" && !f.svg.contains("true "))
+        );
+    }
+
+    #[test]
     fn figures_are_written_atomically() {
         let dir = tempfile::tempdir().unwrap();
         let figs = all_figures(&records(true), None).unwrap();

@@ -466,6 +466,40 @@ pub fn status_counts(records: &[FrameRecord]) -> Option<[usize; 3]> {
 mod tests {
     use super::*;
 
+    #[test]
+    fn a_gif_that_leaves_frames_out_says_so() {
+        let g = GifSummary {
+            frames: 144,
+            tracked: 573,
+            stride: 4,
+            delay_ms: 250,
+        };
+        let n = g.notice().unwrap();
+        assert!(
+            n.contains("144 of the 573 frames tracked (one every 4)"),
+            "{n}"
+        );
+        assert!(
+            n.contains("0.25 s each") && n.contains("--gif-stride"),
+            "{n}"
+        );
+        // A stride fixed by the user that fills the GIF before the end: where it stops.
+        let cut = GifSummary {
+            frames: 10,
+            tracked: 573,
+            stride: 2,
+            delay_ms: 166,
+        };
+        assert!(cut.notice().unwrap().contains("up to frame 19 of the run"));
+        let all = GifSummary {
+            frames: 50,
+            tracked: 50,
+            stride: 1,
+            delay_ms: 83,
+        };
+        assert_eq!(all.notice(), None);
+    }
+
     fn plain(frame: usize) -> FrameRecord {
         FrameRecord::new(frame, Ellipse::new(10.0, 20.0, 4.0, 2.0, 0.0), 150.5, 1.25)
     }

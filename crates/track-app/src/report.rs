@@ -348,4 +348,77 @@ mod tests {
         let img = image::load_from_memory(&png).unwrap();
         assert_eq!((img.width(), img.height()), (STRIP_WIDTH, 150));
     }
+
+    #[test]
+    fn rates_say_what_they_count_and_status_counts_add_up() {
+        let summary = Summary {
+            frames: 100,
+            seconds: 2.0,
+            fps: 50.0,
+            mean_millis: 20.0,
+            wall_seconds: Some(4.0),
+            status_counts: Some([90, 4, 5]),
+            ..Default::default()
+        };
+        let rows = summary_rows(&summary);
+        let get = |k: &str| -> String {
+            rows.iter()
+                .find(|(name, _)| name.starts_with(k))
+                .map(|(_, v)| v.clone())
+                .unwrap_or_else(|| panic!("no row {k}: {rows:?}"))
+        };
+        let tracking = rows
+            .iter()
+            .find(|(k, _)| k.starts_with("tracking rate"))
+            .unwrap();
+        assert!(
+            tracking.0.contains("no decoding, no drawing"),
+            "{}",
+            tracking.0
+        );
+        assert_eq!(tracking.1, "50.0");
+        assert_eq!(get("wall-clock rate"), "25.0");
+        assert_eq!(
+            get("frames locked / partial / lost"),
+            "90 / 4 / 5 (frame 1, the initialisation, has no status)"
+        );
+        let every = Summary {
+            status_counts: Some([90, 5, 5]),
+            ..summary
+        };
+        let rows = summary_rows(&every);
+        assert!(rows.contains(&("frames locked / partial / lost".into(), "90 / 5 / 5".into())));
+    }
+
+    #[test]
+    fn notes_and_the_legend_are_on_the_page() {
+        let summary = Summary {
+            frames: 573,
+            gif: Some(crate::record::GifSummary {
+                frames: 144,
+                tracked: 573,
+                stride: 4,
+                delay_ms: 250,
+            }),
+            ..Default::default()
+        };
+        let mut notes = standard_notes(&summary);
+        notes.push(ess_note(false));
+        let input = ReportInput {
+            title: "t".into(),
+            metrics: summary_rows(&summary),
+            strip: vec![("frame 1".into(), RgbImage::new(8, 8))],
+            notes,
+            ..Default::default()
+        };
+        let html = render_html(&input).unwrap();
+        assert!(html.contains("<th>animated GIF (track.gif)</th><td class=\"v\">144 of 573 frames (one every 4), 0.25 s each</td>"));
+        assert!(html.contains("track.gif holds 144 of the 573 frames tracked"));
+        assert!(html.contains("ESS: the effective sample size"));
+        assert!(html.contains("<h3>Legend</h3>"));
+        for line in LEGEND {
+            assert!(html.contains(&escape(line)), "{line}");
+        }
+        assert!(ess_note(true).contains("tempers"));
+    }
 }

@@ -1053,3 +1053,126 @@ fn print_summary(s: &Summary, out: &Path) -> Result<()> {
     text.push_str(&format!("  outputs in {}\n", out.display()));
     crate::output::print_stdout(&text)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::{Arc, Mutex};
+
+    /// A terminal that keeps what is drawn on it.
+    #[derive(Debug, Clone, Default)]
+    struct Screen(Arc<Mutex<String>>);
+
+    impl indicatif::TermLike for Screen {
+        fn width(&self) -> u16 {
+            200
+        }
+        fn move_cursor_up(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn move_cursor_down(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn move_cursor_right(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn move_cursor_left(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn write_line(&self, s: &str) -> std::io::Result<()> {
+            self.write_str(&format!("{s}\n"))
+        }
+        fn write_str(&self, s: &str) -> std::io::Result<()> {
+            self.0.lock().unwrap().push_str(s);
+            Ok(())
+        }
+        fn clear_line(&self) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn flush(&self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn the_progress_bar_shows_total_eta_and_a_rate_with_one_decimal() {
+        let screen = Screen::default();
+        let bar = progress_to(
+            40,
+            "m1 on clip",
+            ProgressDrawTarget::term_like(Box::new(screen.clone())),
+        );
+        for _ in 0..12 {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+            bar.inc(1);
+        }
+        bar.abandon();
+        let text = screen.0.lock().unwrap().clone();
+        let last = text.lines().rev().find(|l| !l.trim().is_empty()).unwrap();
+        assert!(
+            last.contains("m1 on clip") && last.contains("12/40 frames"),
+            "{last}"
+        );
+        assert!(last.contains("eta "), "{last}");
+        // "NNN.N frames/s": one decimal, never indicatif's four.
+        let rate = last.split(", ").find(|p| p.ends_with("frames/s")).unwrap();
+        let number = rate.trim_end_matches(" frames/s");
+        assert_eq!(number.split('.').nth(1).map(str::len), Some(1), "{last}");
+        assert_eq!(rate_text(12.345_67), "12.3 frames/s");
+        assert_eq!(rate_text(f64::NAN), "– frames/s");
+    }
+
+    #[test]
+    fn the_prescan_moves_its_progress_bar_once_per_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        for k in 1..=5 {
+            image::RgbImage::new(8, 6)
+                .save(dir.path().join(format!("{k}.png")))
+                .unwrap();
+        }
+        let source = crate::sequence::open_sequence(dir.path().to_str().unwrap())
+            .unwrap()
+            .source;
+        let bar = ProgressBar::hidden();
+        bar.set_length(5);
+        let seen = std::cell::RefCell::new(Vec::new());
+        let info = prescan(&source, &bar, &|| {
+            seen.borrow_mut().push(bar.position());
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(info.frames, 5);
+        assert_eq!(*seen.borrow(), vec![1, 2, 3, 4, 5]);
+        // A stop (a signal) ends the pre-scan at once.
+        let stopped = prescan(&source, &ProgressBar::hidden(), &|| {
+            Err(AppError::setting("signal", "stop"))
+        });
+        assert!(stopped.is_err());
+    }
+
+    #[test]
+    fn the_command_line_is_quoted_for_a_shell() {
+        let args = [
+            "/opt/bin/track",
+            "run",
+            "my clips/a.mp4",
+            "--init",
+            "-20,-20,44,56",
+            "--out",
+            "it's",
+        ]
+        .map(std::ffi::OsString::from);
+        assert_eq!(
+            command_line(args),
+            "track run 'my clips/a.mp4' --init -20,-20,44,56 --out 'it'\\''s'"
+        );
+    }
+
+    #[test]
+    fn gif_frames_show_longer_for_a_larger_stride_up_to_a_quarter_second() {
+        assert_eq!(gif_delay_ms(1), 83);
+        assert_eq!(gif_delay_ms(2), 166);
+        assert_eq!(gif_delay_ms(4), GIF_MAX_DELAY_MS);
+        assert_eq!(gif_delay_ms(usize::MAX), GIF_MAX_DELAY_MS);
+    }
+}
