@@ -246,3 +246,24 @@ fn write_demo_report(
         },
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_scene_truth_gives_every_hidden_value_as_the_tracker_estimates_it() {
+        let seq =
+            SyntheticSequence::render(scene_synth::Scenario::Occlusion, Some(40), 1, &[]).unwrap();
+        let truth = scene_truth(&seq);
+        assert_eq!(truth.len(), 40);
+        for (t, f) in truth.iter().zip(&seq.truth) {
+            assert_eq!(t.bbox, Some(f.bbox));
+            // β̂ is 0-based, the generator's classes 1-based.
+            assert_eq!(t.beta, Some(usize::from(f.clutter_class) - 1));
+            assert_eq!(t.lambda, Some(f.edge_density));
+            assert_eq!(t.gamma, Some(1.0 - f.visible_fraction));
+            assert_eq!(t.alpha, Some(f.status));
+        }
+    }
+}
