@@ -189,14 +189,15 @@ pub fn ess_note(region: bool) -> String {
          at its floor), so the ESS stays at or above that floor by design."
             .to_owned()
     } else {
-        "ESS: the effective sample size 1/Σw² of the weights just after weighting, before \
-         resampling. The contour trackers' likelihood multiplies the evidence of every \
-         measurement line, so the log-weights of particles a few pixels apart differ by tens of \
-         nats and a handful of particles carry most of the weight: an ESS of a few percent of \
-         the particles is the normal state of these filters (Isard and Blake's CONDENSATION, \
-         Odobez's and Wu's trackers alike), not a fault. The filter resamples every frame, so \
-         the particles are renewed around the heavy ones; a lasting ESS near 1 while the \
-         estimate drifts is what marks a degenerate run."
+        "ESS: the effective sample size 1/Σw² of the normalised weights just after weighting, \
+         before resampling (N at frame 1, where nothing is weighted). The contour trackers do \
+         not temper their weights: the likelihood multiplies the evidence of every measurement \
+         line, which is sharp next to the spread of the predicted particles, so a few particles \
+         carry most of the weight, and an ESS of a few percent of the particles is the usual \
+         state of these filters, not a fault (docs/RESULTS.md, \"ESS of the contour \
+         trackers\"). The filter resamples every frame, so the particles are renewed around the \
+         heavy ones. What marks a failing run is not a low ESS alone but one that stays near 1 \
+         while the estimate drifts off the target."
             .to_owned()
     }
 }
