@@ -324,9 +324,10 @@ pub struct Summary {
     pub initial_box: Option<BoundingBox>,
     /// Total tracking time, seconds.
     pub seconds: f64,
-    /// Frames per second.
+    /// Frames per second of the tracker alone (`frames / seconds`: no reading, decoding or
+    /// drawing; see `wall_seconds` for the whole run).
     pub fps: f64,
-    /// Mean time per frame, milliseconds.
+    /// Mean tracking time per frame, milliseconds.
     pub mean_millis: f64,
     /// Number of frames in each tracker status (locked, partial, lost), when the tracker has α.
     pub status_counts: Option<[usize; 3]>,

@@ -127,7 +127,8 @@ pub fn run(args: &Args) -> Result<()> {
     write_summary(&args.out.join("summary.json"), &summary)?;
     if !args.quiet {
         crate::output::print_stdout(&format!(
-            "track demo: {} frames of the synthetic `{}` scene tracked by `{}` at {:.1} frames/s\n\
+            "track demo: {} frames of the synthetic `{}` scene tracked by `{}` at {:.1} frames/s \
+             (tracking alone)\n\
              \x20 mean IoU {:.3}, precision@20px {:.3}, success AUC {:.3}\n\
              \x20 open {} (overlays, plots, metrics)\n",
             records.len(),

@@ -80,7 +80,7 @@ pub fn frame_count_from_probe(text: &str) -> Option<usize> {
     let (num, den) = value("streams.stream.0.avg_frame_rate")?.split_once('/')?;
     let rate = num.parse::<f64>().ok()? / den.parse::<f64>().ok()?;
     let n = (seconds * rate).round();
-    (n.is_finite() && n >= 1.0 && n < 1e12).then_some(n as usize)
+    (1.0..1e12).contains(&n).then_some(n as usize)
 }
 
 /// How much of ffmpeg's standard error is kept for messages, bytes (its last lines).
