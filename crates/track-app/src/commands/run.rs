@@ -808,7 +808,7 @@ fn write_run_report(
             config.particles,
             config.seed
         ),
-        metrics: summary_rows(summary),
+        metrics: tracker_rows(config, summary),
         figures,
         strip: strip_frames(strip, strip_picked_in_advance),
         notes: report_notes(config, summary),
@@ -902,6 +902,24 @@ pub fn command_line(args: impl IntoIterator<Item = std::ffi::OsString>) -> Strin
         });
     }
     words.join(" ")
+}
+
+/// The report's metrics rows for the tracker of `config`: the region tracker has no partial
+/// state, so its status counts are locked / lost.
+fn tracker_rows(config: &TrackerConfig, summary: &Summary) -> Vec<(String, String)> {
+    let mut rows = summary_rows(summary);
+    if config.region.is_some()
+        && let Some([l, _, o]) = summary.status_counts
+    {
+        for (name, value) in &mut rows {
+            if name == "frames locked / partial / lost" {
+                let unstated = summary.frames.saturating_sub(l + o);
+                *name = "frames locked / lost".to_owned();
+                *value = format!("{l} / {o}{}", crate::report::unstated_text(unstated));
+            }
+        }
+    }
+    rows
 }
 
 /// Notes under the report's metrics: what the ESS means for this tracker, what its status
