@@ -137,7 +137,7 @@ pub struct Args {
     /// is interrupted.
     #[arg(long)]
     pub smooth: bool,
-    /// No progress bar and no summary.
+    /// No progress bar, no notice (such as the GIF's) and no summary.
     #[arg(long)]
     pub quiet: bool,
 }
