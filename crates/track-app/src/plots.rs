@@ -1,6 +1,11 @@
 //! SVG plots over time of what the tracker estimated (as in W Fig. 11, 14, 16): the clutter class
 //! β̂ with its class probabilities, the clutter density λ̂, the occlusion γ̂, the tracker status α̂
-//! with its probabilities, and the effective sample size.
+//! with its probabilities, the effective sample size, and the IoU with the ground truth.
+//!
+//! What a figure shows follows the tracker ([`PlotOptions::of_tracker`]): the region tracker's
+//! γ̂ is P(lost), not an occlusion, so it has no γ̂ figure, and its status has no partial state,
+//! so P(partial) is not drawn. Where the truth is known ([`TruthAt`]: boxes of an OTB folder, or
+//! every hidden value of the demo's synthetic scene), it is drawn beside the estimates.
 //!
 //! Each figure is rendered to a `String` with plotters' SVG backend, so that the report can inline
 //! it, and written atomically by [`write_figures`]. A figure whose quantity the tracker does not
@@ -9,7 +14,7 @@
 use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
-use vision_core::TrackStatus;
+use vision_core::{BoundingBox, TrackStatus};
 
 use crate::output::write_atomic;
 use crate::record::FrameRecord;
@@ -28,6 +33,94 @@ pub struct Figure {
     pub title: String,
     /// The SVG document.
     pub svg: String,
+}
+
+/// The colour of ground-truth curves.
+const TRUTH: RGBColor = RGBColor(0, 150, 130);
+
+/// What is known of the truth at one frame, to draw beside the estimates.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TruthAt {
+    /// The target's box (IoU figure).
+    pub bbox: Option<BoundingBox>,
+    /// The clutter class β (0-based).
+    pub beta: Option<usize>,
+    /// The clutter density, edges per pixel.
+    pub lambda: Option<f64>,
+    /// The occluded fraction of the target (1 − visible fraction).
+    pub gamma: Option<f64>,
+    /// The tracker status.
+    pub alpha: Option<TrackStatus>,
+}
+
+/// What the figures draw besides the records.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlotOptions {
+    /// Whether γ̂ is an occlusion estimate to plot (not for the region tracker, whose γ̂ is
+    /// P(lost), already drawn as the status probability).
+    pub occlusion: bool,
+    /// The statuses the tracker has, in [`TrackStatus::ALL`] order: their probabilities are
+    /// drawn, the others not.
+    pub statuses: [bool; 3],
+    /// The truth, indexed by frame (0-based); frames past its end have none.
+    pub truth: Vec<TruthAt>,
+}
+
+impl Default for PlotOptions {
+    fn default() -> Self {
+        Self {
+            occlusion: true,
+            statuses: [true; 3],
+            truth: Vec::new(),
+        }
+    }
+}
+
+impl PlotOptions {
+    /// The options for the tracker `config` builds, without truth: the region tracker has no
+    /// occlusion figure and no partial state.
+    pub fn of_tracker(config: &trackers::TrackerConfig) -> Self {
+        let region = config.region.is_some();
+        Self {
+            occlusion: !region,
+            statuses: [true, !region, true],
+            truth: Vec::new(),
+        }
+    }
+
+    /// These options with the truth `truth` (indexed by frame).
+    pub fn with_truth(mut self, truth: Vec<TruthAt>) -> Self {
+        self.truth = truth;
+        self
+    }
+
+    /// The truth at frame `frame`, if any.
+    fn truth_at(&self, frame: usize) -> Option<&TruthAt> {
+        self.truth.get(frame)
+    }
+
+    /// A series of one true value over the records' frames; `None` when no frame has it.
+    fn truth_series(
+        &self,
+        records: &[FrameRecord],
+        label: &str,
+        get: impl Fn(&TruthAt) -> Option<f64>,
+    ) -> Option<Series> {
+        let points: Vec<(f64, f64)> = records
+            .iter()
+            .filter_map(|r| {
+                self.truth_at(r.frame)
+                    .and_then(&get)
+                    .filter(|v| v.is_finite())
+                    .map(|v| (fx(r), v))
+            })
+            .collect();
+        (!points.is_empty()).then(|| Series {
+            label: label.to_owned(),
+            colour: TRUTH,
+            points,
+        })
+    }
 }
 
 /// One line of a chart.
@@ -192,6 +285,14 @@ pub fn plot_beta(
     records: &[FrameRecord],
     smoothed: Option<&[FrameRecord]>,
 ) -> Result<Option<Figure>> {
+    beta_figure(records, smoothed, &PlotOptions::default())
+}
+
+fn beta_figure(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+    options: &PlotOptions,
+) -> Result<Option<Figure>> {
     let k = records
         .iter()
         .map(|r| r.beta_probs.len())
@@ -213,7 +314,8 @@ pub fn plot_beta(
             .filter_map(|r| r.beta_hat.map(|b| (fx(r), b as f64)))
             .collect()
     };
-    let hat = hat_series(beta_hat(records), smoothed.map(beta_hat));
+    let mut hat = hat_series(beta_hat(records), smoothed.map(beta_hat));
+    hat.extend(options.truth_series(records, "true class", |t| t.beta.map(|b| b as f64)));
     let mut probs = Vec::with_capacity(k);
     for c in 0..k {
         let mut points = Vec::new();
@@ -276,6 +378,7 @@ fn scalar_figure(
     get: impl Fn(&FrameRecord) -> Option<f64>,
     fixed_range: Option<(f64, f64)>,
     colour: RGBColor,
+    truth: Option<Series>,
 ) -> Result<Option<Figure>> {
     let mut points = Vec::new();
     for r in records {
@@ -287,7 +390,7 @@ fn scalar_figure(
         return Ok(None);
     }
     let mut series = vec![Series {
-        label: if smoothed.is_some() {
+        label: if smoothed.is_some() || truth.is_some() {
             "filtered".into()
         } else {
             String::new()
@@ -308,6 +411,7 @@ fn scalar_figure(
             points,
         });
     }
+    series.extend(truth);
     let range = fixed_range.unwrap_or_else(|| {
         y_range(
             series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
@@ -330,6 +434,14 @@ pub fn plot_lambda(
     records: &[FrameRecord],
     smoothed: Option<&[FrameRecord]>,
 ) -> Result<Option<Figure>> {
+    lambda_figure(records, smoothed, &PlotOptions::default())
+}
+
+fn lambda_figure(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+    options: &PlotOptions,
+) -> Result<Option<Figure>> {
     scalar_figure(
         records,
         smoothed,
@@ -339,6 +451,7 @@ pub fn plot_lambda(
         |r| r.lambda_hat,
         None,
         RGBColor(60, 90, 200),
+        options.truth_series(records, "true edge density", |t| t.lambda),
     )
 }
 
@@ -350,6 +463,17 @@ pub fn plot_gamma(
     records: &[FrameRecord],
     smoothed: Option<&[FrameRecord]>,
 ) -> Result<Option<Figure>> {
+    gamma_figure(records, smoothed, &PlotOptions::default())
+}
+
+fn gamma_figure(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+    options: &PlotOptions,
+) -> Result<Option<Figure>> {
+    if !options.occlusion {
+        return Ok(None);
+    }
     scalar_figure(
         records,
         smoothed,
@@ -359,6 +483,7 @@ pub fn plot_gamma(
         |r| r.gamma_hat,
         Some((0.0, 1.0)),
         RGBColor(160, 60, 160),
+        options.truth_series(records, "true occluded fraction", |t| t.gamma),
     )
 }
 
@@ -379,6 +504,37 @@ pub fn plot_ess(
         |r| Some(r.ess),
         None,
         RGBColor(30, 30, 30),
+        None,
+    )
+}
+
+/// The IoU of the estimated box with the ground-truth box over time, on the frames that have
+/// one; `None` when none has. The smoothed records' IoU is drawn beside, when given.
+///
+/// # Errors
+/// As [`plot_beta`].
+pub fn plot_iou(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+    options: &PlotOptions,
+) -> Result<Option<Figure>> {
+    let iou = |r: &FrameRecord| -> Option<f64> {
+        options
+            .truth_at(r.frame)
+            .and_then(|t| t.bbox)
+            .filter(|b| b.is_finite() && b.w > 0.0 && b.h > 0.0)
+            .map(|b| r.bbox.iou(&b))
+    };
+    scalar_figure(
+        records,
+        smoothed,
+        "iou",
+        "overlap with the ground truth (IoU)",
+        "IoU",
+        iou,
+        Some((0.0, 1.0)),
+        RGBColor(0, 120, 60),
+        None,
     )
 }
 
@@ -391,6 +547,14 @@ pub fn plot_alpha(
     records: &[FrameRecord],
     smoothed: Option<&[FrameRecord]>,
 ) -> Result<Option<Figure>> {
+    alpha_figure(records, smoothed, &PlotOptions::default())
+}
+
+fn alpha_figure(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+    options: &PlotOptions,
+) -> Result<Option<Figure>> {
     let has = records
         .iter()
         .any(|r| r.alpha_hat.is_some() || !r.alpha_probs.is_empty());
@@ -402,9 +566,15 @@ pub fn plot_alpha(
             .filter_map(|r| r.alpha_hat.map(|a| (fx(r), a.index() as f64)))
             .collect()
     };
-    let hat = hat_series(alpha_hat(records), smoothed.map(alpha_hat));
+    let mut hat = hat_series(alpha_hat(records), smoothed.map(alpha_hat));
+    hat.extend(options.truth_series(records, "true status", |t| {
+        t.alpha.map(|a| a.index() as f64)
+    }));
     let mut probs = Vec::new();
     for (status, colour) in TrackStatus::ALL.iter().zip([LOCKED, PARTIAL, LOST]) {
+        if !options.statuses[status.index()] {
+            continue;
+        }
         let mut points = Vec::new();
         for r in records {
             if let Some(&p) = r.alpha_probs.get(status.index()) {
@@ -456,10 +626,31 @@ pub fn all_figures(
     records: &[FrameRecord],
     smoothed: Option<&[FrameRecord]>,
 ) -> Result<Vec<Figure>> {
+    all_figures_with(records, smoothed, &PlotOptions::default())
+}
+
+/// [`all_figures`] for a tracker and a truth ([`PlotOptions`]): the figures the tracker's
+/// quantities call for, the truth drawn beside the estimates, and the IoU over time (after
+/// α̂) when there are ground-truth boxes.
+///
+/// # Errors
+/// As [`plot_beta`].
+pub fn all_figures_with(
+    records: &[FrameRecord],
+    smoothed: Option<&[FrameRecord]>,
+    options: &PlotOptions,
+) -> Result<Vec<Figure>> {
     let mut out = Vec::new();
-    for f in [plot_beta, plot_lambda, plot_gamma, plot_alpha, plot_ess] {
-        out.extend(f(records, smoothed)?);
+    for f in [
+        beta_figure,
+        lambda_figure,
+        gamma_figure,
+        alpha_figure,
+        plot_iou,
+    ] {
+        out.extend(f(records, smoothed, options)?);
     }
+    out.extend(plot_ess(records, smoothed)?);
     Ok(out)
 }
 
@@ -599,6 +790,77 @@ mod tests {
         rs[7].lambda_hat = Some(f64::NAN);
         let msg = plot_lambda(&rs, None).unwrap_err().to_string();
         assert!(msg.contains("frame 8"), "{msg}");
+    }
+
+    #[test]
+    fn the_region_trackers_p_lost_is_no_occlusion_and_it_has_no_partial_state() {
+        let head = PlotOptions::of_tracker(&trackers::Preset::Head.config(50, 1));
+        let mut rs = records(false);
+        for r in &mut rs {
+            // What the region tracker records: γ̂ = P(lost) and P(partial) = 0.
+            r.gamma_hat = Some(0.1);
+            r.alpha_hat = Some(TrackStatus::Locked);
+            r.alpha_probs = vec![0.9, 0.0, 0.1];
+        }
+        let figs = all_figures_with(&rs, None, &head).unwrap();
+        let names: Vec<&str> = figs.iter().map(|f| f.name).collect();
+        assert_eq!(names, ["alpha", "ess"]);
+        assert!(!figs[0].svg.contains("P(partial)"), "P(partial) drawn");
+        assert!(figs[0].svg.contains("P(locked)") && figs[0].svg.contains("P(lost)"));
+        // The contour trackers keep both.
+        let full = PlotOptions::of_tracker(&trackers::Preset::Full.config(50, 1));
+        let figs = all_figures_with(&rs, None, &full).unwrap();
+        assert!(figs.iter().any(|f| f.name == "gamma"));
+        assert!(figs.iter().any(|f| f.svg.contains("P(partial)")));
+    }
+
+    #[test]
+    fn iou_over_time_and_truth_curves_are_drawn_where_the_truth_is_known() {
+        let rs = records(true);
+        // The box of every record is (40, 42, 20, 16); the truth is that box on even frames,
+        // nothing on odd ones, and the hidden values of a scene on every frame.
+        let truth: Vec<TruthAt> = (0..40)
+            .map(|i| TruthAt {
+                bbox: (i % 2 == 0).then(|| BoundingBox::new(40.0, 42.0, 20.0, 16.0)),
+                beta: Some(1),
+                lambda: Some(0.05),
+                gamma: Some(0.0),
+                alpha: Some(TrackStatus::Locked),
+            })
+            .collect();
+        let options = PlotOptions::default().with_truth(truth);
+        let figs = all_figures_with(&rs, None, &options).unwrap();
+        let names: Vec<&str> = figs.iter().map(|f| f.name).collect();
+        assert_eq!(names, ["beta", "lambda", "gamma", "alpha", "iou", "ess"]);
+        let iou = &figs[4].svg;
+        assert!(iou.contains("IoU"));
+        // 20 labelled frames: one polyline of 20 points at IoU 1 (the top of the y range).
+        let counts: Vec<usize> = iou
+            .split("<polyline")
+            .skip(1)
+            .filter_map(|l| l.split("points=\"").nth(1)?.split('"').next())
+            .map(|p| p.split_whitespace().count())
+            .collect();
+        assert!(counts.contains(&20), "{counts:?}");
+        for (f, label) in [
+            (0, "true class"),
+            (1, "true edge density"),
+            (2, "true occluded fraction"),
+            (3, "true status"),
+        ] {
+            assert!(
+                figs[f].svg.contains(label),
+                "{} lacks {label}",
+                figs[f].name
+            );
+        }
+        // Without truth: no IoU figure, no truth curve.
+        let plain = all_figures(&rs, None).unwrap();
+        assert!(
+            plain
+                .iter()
+                .all(|f| f.name != "iou" && !f.svg.contains("true "))
+        );
     }
 
     #[test]

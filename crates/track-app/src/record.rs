@@ -324,9 +324,10 @@ pub struct Summary {
     pub initial_box: Option<BoundingBox>,
     /// Total tracking time, seconds.
     pub seconds: f64,
-    /// Frames per second.
+    /// Frames per second of the tracker alone (`frames / seconds`: no reading, decoding or
+    /// drawing; see `wall_seconds` for the whole run).
     pub fps: f64,
-    /// Mean time per frame, milliseconds.
+    /// Mean tracking time per frame, milliseconds.
     pub mean_millis: f64,
     /// Number of frames in each tracker status (locked, partial, lost), when the tracker has α.
     pub status_counts: Option<[usize; 3]>,
@@ -334,10 +335,53 @@ pub struct Summary {
     pub metrics: Option<SequenceMetrics>,
     /// The files written, relative to the output folder.
     pub outputs: Vec<String>,
+    /// Wall-clock time of the run from its start to the end of tracking, seconds: reading and
+    /// decoding the frames, tracking and drawing (`seconds` is the tracking alone).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall_seconds: Option<f64>,
+    /// What the animated GIF holds, when one was written.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gif: Option<GifSummary>,
     /// Set when the run stopped before the end of its input (a signal, or an error in a stream):
     /// the outputs then hold the frames tracked until then, and only those.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interrupted: Option<Interruption>,
+}
+
+/// What an animated GIF holds: which overlays, and how fast it plays.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GifSummary {
+    /// Overlays in the GIF.
+    pub frames: usize,
+    /// Frames tracked (overlays drawn).
+    pub tracked: usize,
+    /// One overlay in the GIF every `stride` frames tracked.
+    pub stride: usize,
+    /// Display time of each GIF frame, milliseconds.
+    pub delay_ms: u32,
+}
+
+impl GifSummary {
+    /// The notice to print when the GIF leaves frames out, `None` when it holds every frame.
+    pub fn notice(&self) -> Option<String> {
+        if self.frames >= self.tracked {
+            return None;
+        }
+        let last = (self.frames.saturating_sub(1)) * self.stride + 1;
+        let span = if last + self.stride <= self.tracked {
+            format!(", up to frame {last} of the run")
+        } else {
+            String::new()
+        };
+        Some(format!(
+            "track.gif holds {} of the {} frames tracked (one every {}{span}), {:.2} s each;              --gif-stride and --gif-frames choose (--gif-stride 1 --gif-frames {} keeps all)",
+            self.frames,
+            self.tracked,
+            self.stride,
+            f64::from(self.delay_ms) / 1e3,
+            self.tracked
+        ))
+    }
 }
 
 /// Why and where a run stopped early (see [`Summary::interrupted`]).
@@ -359,6 +403,7 @@ impl Summary {
     pub fn validate(&self) -> Result<()> {
         let mut fields = vec![
             ("seconds", self.seconds),
+            ("wall_seconds", self.wall_seconds.unwrap_or(0.0)),
             ("fps", self.fps),
             ("mean_millis", self.mean_millis),
         ];
@@ -421,6 +466,40 @@ pub fn status_counts(records: &[FrameRecord]) -> Option<[usize; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_gif_that_leaves_frames_out_says_so() {
+        let g = GifSummary {
+            frames: 144,
+            tracked: 573,
+            stride: 4,
+            delay_ms: 250,
+        };
+        let n = g.notice().unwrap();
+        assert!(
+            n.contains("144 of the 573 frames tracked (one every 4)"),
+            "{n}"
+        );
+        assert!(
+            n.contains("0.25 s each") && n.contains("--gif-stride"),
+            "{n}"
+        );
+        // A stride fixed by the user that fills the GIF before the end: where it stops.
+        let cut = GifSummary {
+            frames: 10,
+            tracked: 573,
+            stride: 2,
+            delay_ms: 166,
+        };
+        assert!(cut.notice().unwrap().contains("up to frame 19 of the run"));
+        let all = GifSummary {
+            frames: 50,
+            tracked: 50,
+            stride: 1,
+            delay_ms: 83,
+        };
+        assert_eq!(all.notice(), None);
+    }
 
     fn plain(frame: usize) -> FrameRecord {
         FrameRecord::new(frame, Ellipse::new(10.0, 20.0, 4.0, 2.0, 0.0), 150.5, 1.25)

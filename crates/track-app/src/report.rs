@@ -1,5 +1,6 @@
-//! One self-contained HTML page per run: a title, a table of metrics, the SVG plots inlined, and a
-//! strip of overlay frames inlined as base64 PNG. It needs no other file and no network, so it can
+//! One self-contained HTML page per run: a title, the command line, a table of metrics with notes
+//! on how to read them, a strip of overlay frames inlined as base64 PNG with the legend of their
+//! colours, and the SVG plots inlined. It needs no other file and no network, so it can
 //! be mailed or attached as it is.
 
 use std::fmt::Write as _;
@@ -12,7 +13,7 @@ use crate::Result;
 use crate::output::write_atomic;
 use crate::plots::Figure;
 use crate::record::Summary;
-use crate::render::{encode_png, thumbnail};
+use crate::render::{LEGEND, encode_png, thumbnail};
 
 /// Width of the frames in the strip, pixels (larger frames are scaled down).
 pub const STRIP_WIDTH: u32 = 200;
@@ -28,8 +29,11 @@ pub struct ReportInput {
     pub metrics: Vec<(String, String)>,
     /// Plots, inlined as SVG.
     pub figures: Vec<Figure>,
-    /// Overlay frames with their captions, inlined as PNG (scaled to [`STRIP_WIDTH`]).
+    /// Overlay frames with their captions, inlined as PNG (scaled to [`STRIP_WIDTH`]); the
+    /// legend of their colours ([`LEGEND`]) follows them.
     pub strip: Vec<(String, RgbImage)>,
+    /// Paragraphs under the metrics table: how to read them ([`standard_notes`], [`ess_note`]).
+    pub notes: Vec<String>,
 }
 
 /// Escapes text for HTML element content and attribute values.
@@ -67,8 +71,18 @@ pub fn strip_indices(frames: usize, count: usize) -> Vec<usize> {
     v
 }
 
+/// How the frames without a tracker status are described after the status counts: empty when
+/// every frame has one, else the count and why (the initialisation frame has no estimate).
+pub fn unstated_text(unstated: usize) -> String {
+    match unstated {
+        0 => String::new(),
+        1 => " (frame 1, the initialisation, has no status)".to_owned(),
+        n => format!(" ({n} frames without a status, the initialisation among them)"),
+    }
+}
+
 /// The metrics-table rows of a run summary: sequence, tracker, particles, seed, frames, size,
-/// speed, and the scores when there is ground truth.
+/// speed, the status counts, the GIF, and the scores when there is ground truth.
 pub fn summary_rows(s: &Summary) -> Vec<(String, String)> {
     let mut rows = vec![
         ("sequence".to_string(), s.sequence.clone()),
@@ -80,9 +94,21 @@ pub fn summary_rows(s: &Summary) -> Vec<(String, String)> {
             "frame size".to_string(),
             format!("{}×{}", s.width, s.height),
         ),
-        ("frames/s".to_string(), format!("{:.1}", s.fps)),
-        ("ms/frame".to_string(), format!("{:.2}", s.mean_millis)),
+        (
+            "tracking rate, frames/s (the tracker alone: no decoding, no drawing)".to_string(),
+            format!("{:.1}", s.fps),
+        ),
+        (
+            "tracking time per frame, ms".to_string(),
+            format!("{:.2}", s.mean_millis),
+        ),
     ];
+    if let Some(w) = s.wall_seconds {
+        rows.push((
+            "wall-clock rate, frames/s (reading, decoding, tracking and drawing)".to_string(),
+            format!("{:.1}", s.frames as f64 / w.max(1e-9)),
+        ));
+    }
     if let Some(i) = &s.interrupted {
         rows.push((
             "interrupted".into(),
@@ -90,9 +116,30 @@ pub fn summary_rows(s: &Summary) -> Vec<(String, String)> {
         ));
     }
     if let Some([l, p, o]) = s.status_counts {
+        let unstated = s.frames.saturating_sub(l + p + o);
         rows.push((
             "frames locked / partial / lost".into(),
-            format!("{l} / {p} / {o}"),
+            format!("{l} / {p} / {o}{}", unstated_text(unstated)),
+        ));
+    }
+    if let Some(g) = &s.gif {
+        rows.push((
+            "animated GIF (track.gif)".into(),
+            if g.frames >= g.tracked {
+                format!(
+                    "all {} frames, {:.2} s each",
+                    g.frames,
+                    f64::from(g.delay_ms) / 1e3
+                )
+            } else {
+                format!(
+                    "{} of {} frames (one every {}), {:.2} s each",
+                    g.frames,
+                    g.tracked,
+                    g.stride,
+                    f64::from(g.delay_ms) / 1e3
+                )
+            },
         ));
     }
     if let Some(m) = &s.metrics {
@@ -118,11 +165,48 @@ pub fn summary_rows(s: &Summary) -> Vec<(String, String)> {
     rows
 }
 
+/// Notes every report carries: what the rates measure, and the GIF's frames when it leaves some
+/// out.
+pub fn standard_notes(s: &Summary) -> Vec<String> {
+    let mut notes = vec![
+        "The tracking rate counts the tracker's own time per frame only; the wall-clock rate \
+         counts everything from start to the end of tracking: reading and decoding the frames \
+         (and the pre-scan that checks them first), tracking, and drawing and writing overlays."
+            .to_owned(),
+    ];
+    if let Some(n) = s.gif.and_then(|g| g.notice()) {
+        notes.push(format!("The animated GIF: {n}."));
+    }
+    notes
+}
+
+/// What the effective sample size (ESS) plot shows, for a contour tracker or the region tracker
+/// (`region`).
+pub fn ess_note(region: bool) -> String {
+    if region {
+        "ESS: the effective sample size 1/Σw² of the weights after weighting. The region \
+         tracker tempers its weights (raises them to the smallest power ≤ 1 that keeps the ESS \
+         at its floor), so the ESS stays at or above that floor by design."
+            .to_owned()
+    } else {
+        "ESS: the effective sample size 1/Σw² of the normalised weights just after weighting, \
+         before resampling (N at frame 1, where nothing is weighted). The contour trackers do \
+         not temper their weights: the likelihood multiplies the evidence of every measurement \
+         line, which is sharp next to the spread of the predicted particles, so a few particles \
+         carry most of the weight, and an ESS of a few percent of the particles is the usual \
+         state of these filters, not a fault (docs/RESULTS.md, \"ESS of the contour \
+         trackers\"). The filter resamples every frame, so the particles are renewed around the \
+         heavy ones. What marks a failing run is not a low ESS alone but one that stays near 1 \
+         while the estimate drifts off the target."
+            .to_owned()
+    }
+}
+
 const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1500px;margin:2em auto;\
 padding:0 1em;color:#222}table{border-collapse:collapse}td,th{border:1px solid #ccc;\
 padding:4px 10px;text-align:left}td.v{text-align:right;font-variant-numeric:tabular-nums}\
 .strip{display:flex;flex-wrap:wrap;gap:8px}figure{margin:0}figcaption{font-size:.85em;\
-color:#555}.plot svg{max-width:100%;height:auto}";
+color:#555}.plot svg{max-width:100%;height:auto}p.note{max-width:60em;color:#444}";
 
 /// Renders the page.
 ///
@@ -150,6 +234,9 @@ pub fn render_html(input: &ReportInput) -> Result<String> {
         }
         h.push_str("</table>\n");
     }
+    for note in &input.notes {
+        let _ = writeln!(h, "<p class=\"note\">{}</p>", escape(note));
+    }
     if !input.strip.is_empty() {
         h.push_str("<h2>Frames</h2>\n<div class=\"strip\">\n");
         let b64 = base64::engine::general_purpose::STANDARD;
@@ -162,7 +249,11 @@ pub fn render_html(input: &ReportInput) -> Result<String> {
                 b64.encode(png)
             );
         }
-        h.push_str("</div>\n");
+        h.push_str("</div>\n<h3>Legend</h3>\n<ul class=\"legend\">\n");
+        for line in LEGEND {
+            let _ = writeln!(h, "<li>{}</li>", escape(line));
+        }
+        h.push_str("</ul>\n");
     }
     if !input.figures.is_empty() {
         h.push_str("<h2>Plots</h2>\n");
@@ -235,6 +326,7 @@ mod tests {
                 ("frame 1".into(), RgbImage::new(400, 300)),
                 ("frame 10".into(), RgbImage::new(40, 30)),
             ],
+            notes: Vec::new(),
         };
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("report.html");
@@ -256,5 +348,78 @@ mod tests {
             .unwrap();
         let img = image::load_from_memory(&png).unwrap();
         assert_eq!((img.width(), img.height()), (STRIP_WIDTH, 150));
+    }
+
+    #[test]
+    fn rates_say_what_they_count_and_status_counts_add_up() {
+        let summary = Summary {
+            frames: 100,
+            seconds: 2.0,
+            fps: 50.0,
+            mean_millis: 20.0,
+            wall_seconds: Some(4.0),
+            status_counts: Some([90, 4, 5]),
+            ..Default::default()
+        };
+        let rows = summary_rows(&summary);
+        let get = |k: &str| -> String {
+            rows.iter()
+                .find(|(name, _)| name.starts_with(k))
+                .map(|(_, v)| v.clone())
+                .unwrap_or_else(|| panic!("no row {k}: {rows:?}"))
+        };
+        let tracking = rows
+            .iter()
+            .find(|(k, _)| k.starts_with("tracking rate"))
+            .unwrap();
+        assert!(
+            tracking.0.contains("no decoding, no drawing"),
+            "{}",
+            tracking.0
+        );
+        assert_eq!(tracking.1, "50.0");
+        assert_eq!(get("wall-clock rate"), "25.0");
+        assert_eq!(
+            get("frames locked / partial / lost"),
+            "90 / 4 / 5 (frame 1, the initialisation, has no status)"
+        );
+        let every = Summary {
+            status_counts: Some([90, 5, 5]),
+            ..summary
+        };
+        let rows = summary_rows(&every);
+        assert!(rows.contains(&("frames locked / partial / lost".into(), "90 / 5 / 5".into())));
+    }
+
+    #[test]
+    fn notes_and_the_legend_are_on_the_page() {
+        let summary = Summary {
+            frames: 573,
+            gif: Some(crate::record::GifSummary {
+                frames: 144,
+                tracked: 573,
+                stride: 4,
+                delay_ms: 250,
+            }),
+            ..Default::default()
+        };
+        let mut notes = standard_notes(&summary);
+        notes.push(ess_note(false));
+        let input = ReportInput {
+            title: "t".into(),
+            metrics: summary_rows(&summary),
+            strip: vec![("frame 1".into(), RgbImage::new(8, 8))],
+            notes,
+            ..Default::default()
+        };
+        let html = render_html(&input).unwrap();
+        assert!(html.contains("<th>animated GIF (track.gif)</th><td class=\"v\">144 of 573 frames (one every 4), 0.25 s each</td>"));
+        assert!(html.contains("track.gif holds 144 of the 573 frames tracked"));
+        assert!(html.contains("ESS: the effective sample size"));
+        assert!(html.contains("<h3>Legend</h3>"));
+        for line in LEGEND {
+            assert!(html.contains(&escape(line)), "{line}");
+        }
+        assert!(ess_note(true).contains("tempers"));
     }
 }

@@ -10,7 +10,9 @@ use trackers::{Estimate, SmootherSettings, SwitchingStatistics, Tracker};
 use vision_core::{BoundingBox, Ellipse, TrackStatus};
 
 use crate::record::FrameRecord;
-use crate::render::{Overlay, clutter_colour, render_overlay, status_colour};
+use crate::render::{
+    INIT, Overlay, PARTICLE_MAX_ALPHA, clutter_colour, render_overlay, status_colour,
+};
 use crate::sequence::{Frame, Original};
 use crate::{AppError, Result};
 
@@ -24,12 +26,20 @@ pub enum ColourBy {
     Clutter,
 }
 
+/// The most particles drawn while the tracker is lost: they spread over the frame then, and more
+/// of them would hide the estimate.
+pub const LOST_PARTICLES: usize = 10;
+
+/// Particles drawn fainter than this opacity are not drawn at all.
+const MIN_PARTICLE_ALPHA: f64 = 0.02;
+
 /// How a session draws overlays.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DrawOptions {
     /// What colours the contour.
     pub colour_by: ColourBy,
-    /// How many of the heaviest particles to draw faintly.
+    /// How many of the heaviest particles to draw faintly ([`LOST_PARTICLES`] at most while the
+    /// tracker is lost).
     pub particles: usize,
 }
 
@@ -61,6 +71,29 @@ pub fn display_status(e: &Estimate) -> TrackStatus {
         return s.alpha_hat;
     }
     e.gamma.map_or(TrackStatus::Locked, status_from_gamma)
+}
+
+/// Whether the estimate carries a tracker status: α̂ of a status process, or γ̂ read as one.
+fn has_status(e: &Estimate) -> bool {
+    e.status.is_some() || e.gamma.is_some()
+}
+
+/// The overlay's label: the 1-based frame number, then `init` on the initialisation frame, else
+/// the clutter class when the contour is coloured by it and the status when the tracker has one.
+pub fn overlay_label(frame: usize, e: &Estimate, init: bool, colour_by: ColourBy) -> String {
+    let mut text = format!("frame {}", frame + 1);
+    if init {
+        text.push_str("  init");
+        return text;
+    }
+    if let (ColourBy::Clutter, Some(c)) = (colour_by, &e.clutter) {
+        text.push_str(&format!("  clutter {}", c.beta_hat));
+    }
+    if has_status(e) {
+        text.push_str("  ");
+        text.push_str(display_status(e).name());
+    }
+    text
 }
 
 /// The record of one estimate (frame index from the caller: the sequence's numbering).
@@ -151,10 +184,11 @@ impl Session {
                 other => failed(other),
             })
         }?;
+        let init = !self.started;
         self.started = true;
         if let Some(draw) = self.draw {
             self.overlays
-                .push(self.overlay(frame, &estimate, truth, draw));
+                .push(self.overlay(frame, &estimate, truth, draw, init));
         }
         self.records.push(record_of(frame.index, &estimate));
         self.records
@@ -162,25 +196,43 @@ impl Session {
             .ok_or_else(|| AppError::computation("tracking", "no record"))
     }
 
+    /// The overlay of `e` on `frame`. The initialisation frame shows the initial contour in
+    /// [`INIT`] without particles: the tracker has estimated nothing there yet, and its initial
+    /// particles, equally weighted around the start, would draw as one thick band.
     fn overlay(
         &self,
         frame: &Frame,
         e: &Estimate,
         truth: Option<BoundingBox>,
         draw: DrawOptions,
+        init: bool,
     ) -> RgbImage {
-        let colour = match (draw.colour_by, &e.clutter) {
-            (ColourBy::Clutter, Some(c)) => clutter_colour(c.beta_hat),
-            _ => status_colour(display_status(e)),
+        let status = display_status(e);
+        let colour = match (init, draw.colour_by, &e.clutter) {
+            (true, _, _) => INIT,
+            (false, ColourBy::Clutter, Some(c)) => clutter_colour(c.beta_hat),
+            _ => status_colour(status),
         };
-        let particles = self.tracker.particles(draw.particles);
-        let heaviest = particles.first().map_or(1.0, |p| p.weight).max(1e-300);
         let mut overlay = Overlay::new(e.ellipse, colour);
-        overlay.particles = particles
-            .iter()
-            .map(|p| (p.ellipse, 0.6 * (p.weight / heaviest).sqrt()))
-            .collect();
+        if !init {
+            let lost = has_status(e) && status == TrackStatus::Lost;
+            let n = if lost {
+                draw.particles.min(LOST_PARTICLES)
+            } else {
+                draw.particles
+            };
+            let particles = self.tracker.particles(n);
+            let heaviest = particles.first().map_or(1.0, |p| p.weight).max(1e-300);
+            // Opacity in proportion to the weight: a particle ten times lighter than the
+            // heaviest is ten times fainter, so the cloud shows where the weight is.
+            overlay.particles = particles
+                .iter()
+                .map(|p| (p.ellipse, PARTICLE_MAX_ALPHA * (p.weight / heaviest)))
+                .filter(|(_, a)| *a >= MIN_PARTICLE_ALPHA)
+                .collect();
+        }
         overlay.groundtruth = truth;
+        overlay.label = Some(overlay_label(frame.index, e, init, draw.colour_by));
         render_overlay(&frame.original.to_rgb(), &overlay)
     }
 

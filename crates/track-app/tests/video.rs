@@ -253,3 +253,19 @@ fn sigterm_during_a_video_run_writes_the_frames_tracked_and_leaves_no_ffmpeg() {
     let csv = std::fs::read_to_string(out.join("track.csv")).unwrap();
     assert_eq!(csv.lines().count() as u64, frames + 1);
 }
+
+#[test]
+fn ffprobe_gives_a_videos_frame_count_for_the_progress_bar() {
+    if !ffmpeg_wanted() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    // MP4 states the count; Matroska does not, so it comes from duration × rate.
+    use track_app::sequence::FrameSource as _;
+    for (name, frames) in [("count.mp4", 17), ("count.mkv", 23)] {
+        let video = make_video(dir.path(), name, "64x48", 25, frames);
+        let seq = track_app::sequence::open_sequence(s(&video)).unwrap();
+        assert_eq!(seq.source.expected_frames(), Some(frames), "{name}");
+        assert!(seq.source.is_stream());
+    }
+}

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use image::RgbImage;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle};
 use trackers::{Preset, TrackerConfig};
 use vision_core::{BoundingBox, Ellipse, TrackStatus};
 
@@ -12,12 +12,12 @@ use crate::groundtruth::{
     parse_ellipse_arg,
 };
 use crate::metrics::{SequenceMetrics, evaluate};
-use crate::plots::{all_figures, write_figures};
+use crate::plots::{all_figures_with, write_figures};
 use crate::record::{
-    CsvColumns, FrameRecord, Interruption, Summary, status_counts, write_summary,
+    CsvColumns, FrameRecord, GifSummary, Interruption, Summary, status_counts, write_summary,
     write_track_tables,
 };
-use crate::render::{thumbnail, write_gif, write_png};
+use crate::render::{OverlayFormat, thumbnail, write_gif};
 use crate::report::{ReportInput, strip_indices, summary_rows, write_report};
 use crate::sequence::{FrameSource, Sequence, Source, open_sequence};
 use thinned::Thinned;
@@ -34,8 +34,14 @@ pub const DEFAULT_TRACKER: &str = "head";
 pub const DEFAULT_PARTICLES: usize = 200;
 /// Default seed.
 pub const DEFAULT_SEED: u64 = 1;
-/// Largest number of frames put in the animated GIF (longer runs use every k-th overlay).
+/// Default largest number of frames put in the animated GIF (`--gif-frames`; longer runs use
+/// every k-th overlay).
 pub const GIF_MAX_FRAMES: usize = 150;
+/// Display time of one GIF frame when every overlay is in it, milliseconds (12 frames/s).
+pub const GIF_FRAME_MS: u32 = 1000 / 12;
+/// Longest display time of one GIF frame, milliseconds: a GIF of every k-th overlay shows each
+/// k times longer, up to this.
+pub const GIF_MAX_DELAY_MS: u32 = 250;
 /// Number of overlay frames in the report's strip.
 pub const STRIP_FRAMES: usize = 8;
 
@@ -46,8 +52,12 @@ pub const STRIP_FRAMES: usize = 8;
     track run frames/ --init 120,40,60,70 --tracker w-eval --plots\n  \
     track run clip.mp4 --init 100,80,60,70 --out clip --overlay\n  \
     ffmpeg -i video.mp4 -f yuv4mpegpipe - | track run - --init 100,80,60,70 --out video\n\n\
-    Outputs in --out: track.csv, boxes.txt, summary.json; overlay/NNNN.png (--overlay), track.gif \
-    (--gif), plots/*.svg (--plots), report.html (--report).")]
+    Outputs in --out: track.csv, boxes.txt, summary.json; overlay/NNNN.png or .jpg (--overlay), \
+    track.gif (--gif), plots/*.svg (--plots), report.html (--report).\n\n\
+    Overlays: the estimate is a thick contour over a dark halo, coloured by status (locked \
+    green, partial orange, lost red) or clutter class (--colour-by clutter); faint thin contours \
+    are the heaviest particles; a white dashed box is the ground truth; frame 1 shows the \
+    initial contour in white; the frame number and status are written at the top left.")]
 pub struct Args {
     /// A folder of images (PNG, JPEG, GIF, BMP, WebP, TIFF; in natural order of their names), an
     /// OTB folder (img/ + groundtruth_rect.txt), a video file (.mp4, .mov, .avi, .mkv, …: any file
@@ -84,12 +94,25 @@ pub struct Args {
     /// Output folder.
     #[arg(long, default_value = "track-out")]
     pub out: PathBuf,
-    /// Write overlay PNG frames into OUT/overlay/.
+    /// Write overlay frames into OUT/overlay/ (NNNN.png, or NNNN.jpg with --overlay-format jpeg).
     #[arg(long)]
     pub overlay: bool,
-    /// Write an animated GIF of the overlays, OUT/track.gif.
+    /// File format of the overlay frames: png (lossless) or jpeg (quality 90, several times
+    /// smaller; docs/RESULTS.md gives sizes).
+    #[arg(long, value_enum, default_value_t)]
+    pub overlay_format: OverlayFormat,
+    /// Write an animated GIF of the overlays, OUT/track.gif. It holds at most --gif-frames
+    /// frames: a longer run puts every k-th overlay in it (k as small as fits), and says so.
     #[arg(long)]
     pub gif: bool,
+    /// Put every N-th overlay in the GIF, from the first, until it holds --gif-frames frames
+    /// (then the GIF ends before the run does) [default: the smallest N that fits the whole run].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub gif_stride: Option<u32>,
+    /// Most frames in the GIF (each is kept in memory until the end of the run).
+    #[arg(long, value_name = "N", default_value_t = GIF_MAX_FRAMES as u32,
+          value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub gif_frames: u32,
     /// Write SVG plots of β̂, λ̂, γ̂, α̂ and ESS into OUT/plots/.
     #[arg(long)]
     pub plots: bool,
@@ -114,7 +137,7 @@ pub struct Args {
     /// is interrupted.
     #[arg(long)]
     pub smooth: bool,
-    /// No progress bar and no summary.
+    /// No progress bar, no notice (such as the GIF's) and no summary.
     #[arg(long)]
     pub quiet: bool,
 }
@@ -278,19 +301,71 @@ pub fn initial_ellipse_for(e: &Ellipse, config: &TrackerConfig) -> Result<Ellips
     })
 }
 
-/// A progress bar on standard error, hidden when `quiet`.
+/// A progress bar on standard error, hidden when `quiet`: `len` frames, with the rate and the
+/// time left.
 pub fn progress(len: u64, quiet: bool, what: &str) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }
-    let bar = ProgressBar::new(len);
+    progress_to(len, what, ProgressDrawTarget::stderr())
+}
+
+/// [`progress`] drawn on `target`.
+pub fn progress_to(len: u64, what: &str, target: ProgressDrawTarget) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(len), target);
     if let Ok(style) =
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {per_sec}, eta {eta}")
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {rate}, eta {eta}")
     {
-        bar.set_style(style.progress_chars("=> "));
+        bar.set_style(style.with_key("rate", rate_key).progress_chars("=> "));
     }
     bar.set_message(what.to_owned());
     bar
+}
+
+/// The `{rate}` of a progress bar: frames per second with one decimal.
+fn rate_key(state: &ProgressState, w: &mut dyn std::fmt::Write) {
+    let _ = w.write_str(&rate_text(state.per_sec()));
+}
+
+/// A rate in frames per second with one decimal (`–` before there is one).
+pub fn rate_text(per_sec: f64) -> String {
+    if per_sec.is_finite() && per_sec >= 0.0 {
+        format!("{per_sec:.1} frames/s")
+    } else {
+        "– frames/s".to_owned()
+    }
+}
+
+/// The progress bar of the pre-scan of `source` (every frame decoded once before tracking),
+/// hidden when `quiet`; a spinner when the number of frames is not known before.
+fn prescan_progress(source: &Source, quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = match source.len() {
+        Some(n) => progress(n as u64, false, ""),
+        None => stream_progress(false),
+    };
+    bar.set_message("checking the frames");
+    bar
+}
+
+/// Pre-scans `source` ([`FrameSource::validate_all_with`]), moving `bar` on at each frame
+/// checked and calling `stop` (a signal check) there; clears the bar at the end.
+///
+/// # Errors
+/// The pre-scan's error, or `stop`'s.
+pub fn prescan(
+    source: &Source,
+    bar: &ProgressBar,
+    stop: &dyn Fn() -> Result<()>,
+) -> Result<crate::sequence::SequenceInfo> {
+    let info = source.validate_all_with(&mut |checked| {
+        bar.set_position(checked as u64);
+        stop()
+    });
+    bar.finish_and_clear();
+    info
 }
 
 /// The files `track run` writes in `--out`, besides `overlay/NNNN.png` and `plots/*.svg`.
@@ -304,9 +379,9 @@ pub const OUTPUT_FILES: [&str; 7] = [
     "report.html",
 ];
 
-/// Whether `path` is named as an overlay `track run` writes (`<digits>.png`).
+/// Whether `path` is named as an overlay `track run` writes (`<digits>.png` or `<digits>.jpg`).
 fn is_overlay_name(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e == "png")
+    path.extension().is_some_and(|e| e == "png" || e == "jpg")
         && path
             .file_stem()
             .and_then(|s| s.to_str())
@@ -358,6 +433,7 @@ pub fn prepare_out(
 /// # Errors
 /// See [`AppError`].
 pub fn run(args: &Args) -> Result<()> {
+    let started = std::time::Instant::now();
     // First of all, so that a signal during the checks ends the run cleanly, with a message.
     let signals = signals::StopSignals::install()?;
     let (input, source) = CheckedInput::open(args, &signals)?;
@@ -381,8 +457,8 @@ pub fn run(args: &Args) -> Result<()> {
         ..DrawOptions::default()
     });
     let session = Session::new(tracker, draw);
-    let mut kept = Kept::new(input.known_frames, input.start);
-    let bar = match input.known_frames {
+    let mut kept = Kept::new(args, input.known_frames, input.start);
+    let bar = match input.known_frames.or(input.expected_frames) {
         Some(n) => progress(n as u64, args.quiet, ""),
         None => stream_progress(args.quiet),
     };
@@ -394,7 +470,8 @@ pub fn run(args: &Args) -> Result<()> {
         signals: &signals,
         bar: &bar,
     };
-    let tracked = frames.track(args, source, session, &mut kept)?;
+    let mut tracked = frames.track(args, source, session, &mut kept)?;
+    tracked.wall_seconds = started.elapsed().as_secs_f64();
     write_outputs(args, &input, tracked, kept)
 }
 
@@ -407,6 +484,9 @@ struct CheckedInput {
     frame_rate: Option<f64>,
     /// The number of frames, unless the input is a stream.
     known_frames: Option<usize>,
+    /// The number of frames a stream is expected to have (ffprobe's count for a video file),
+    /// for the progress bar only.
+    expected_frames: Option<usize>,
     width: usize,
     height: usize,
     /// The ground truth of an OTB folder, one box (or none) per frame.
@@ -452,9 +532,11 @@ impl CheckedInput {
                 .ok_or_else(|| AppError::input(&args.sequence, "a stream without a frame size"))?;
             (None, w, h)
         } else {
-            let info = sequence
-                .source
-                .validate_all_with(&mut |_| signals.stop_if_received())?;
+            let info = prescan(
+                &sequence.source,
+                &prescan_progress(&sequence.source, args.quiet),
+                &|| signals.stop_if_received(),
+            )?;
             (Some(info.frames), info.width, info.height)
         };
         let truth = match (&sequence.groundtruth, known_frames) {
@@ -472,6 +554,7 @@ impl CheckedInput {
             name: sequence.name,
             frame_rate: sequence.source.frame_rate(),
             known_frames,
+            expected_frames: sequence.source.expected_frames(),
             width,
             height,
             truth,
@@ -529,6 +612,7 @@ fn write_outputs(
         output,
         smoothed: tracked_smoothed,
         frames_read,
+        wall_seconds,
         mut stop,
     } = tracked;
     let (config, start) = (&input.config, input.start);
@@ -558,8 +642,23 @@ fn write_outputs(
         smoothed.as_deref(),
         &mut written,
     )?;
-    let figures =
-        write_animation_and_plots(args, &records, smoothed.as_deref(), gif, &mut written)?;
+    let (figures, gif) = write_animation_and_plots(
+        args,
+        input,
+        &records,
+        smoothed.as_deref(),
+        gif,
+        &mut written,
+    )?;
+    if let Some(notice) = gif.as_ref().and_then(|g| g.notice())
+        && !args.quiet
+    {
+        // A notice only: standard error that cannot be written is no reason to fail the run.
+        let _ = std::io::Write::write_all(
+            &mut std::io::stderr(),
+            format!("note: {notice}\n").as_bytes(),
+        );
+    }
     let metrics = match &input.truth {
         Some(t) => Some(score(start, &records, t, output.seconds)?),
         None => None,
@@ -568,7 +667,7 @@ fn write_outputs(
         written.push("report.html".into());
     }
     written.push("summary.json".into());
-    let summary = run_summary(
+    let mut summary = run_summary(
         input,
         &records,
         output.seconds,
@@ -576,6 +675,8 @@ fn write_outputs(
         written,
         interrupted,
     );
+    summary.wall_seconds = Some(wall_seconds);
+    summary.gif = gif;
     if args.report {
         write_run_report(args, input, &summary, figures, strip, strip_known.is_some())?;
     }
@@ -659,6 +760,8 @@ fn run_summary(
         status_counts: status_counts(records),
         metrics,
         outputs,
+        wall_seconds: None,
+        gif: None,
         interrupted,
     }
 }
@@ -676,37 +779,49 @@ fn write_run_report(
     let report = ReportInput {
         title: format!("{} — {}", input.name, config.name),
         subtitle: format!(
-            "track run {} --tracker {} --particles {} --seed {}",
-            args.sequence, config.name, config.particles, config.seed
+            "{} (tracker {}, {} particles, seed {})",
+            command_line(std::env::args_os()),
+            config.name,
+            config.particles,
+            config.seed
         ),
-        metrics: summary_rows(summary),
+        metrics: tracker_rows(config, summary),
         figures,
         strip: strip_frames(strip, strip_picked_in_advance),
+        notes: report_notes(config, summary),
     };
     write_report(&args.out.join("report.html"), &report)
 }
 
 /// Writes `track.gif` and `plots/*.svg` when asked for, adding them to `written`; returns the
-/// figures, which the report shows too (none when neither plots nor a report are asked for).
+/// figures, which the report shows too (none when neither plots nor a report are asked for),
+/// and what the GIF holds.
 fn write_animation_and_plots(
     args: &Args,
+    input: &CheckedInput,
     records: &[FrameRecord],
     smoothed: Option<&[FrameRecord]>,
     gif: Thinned<RgbImage>,
     written: &mut Vec<String>,
-) -> Result<Vec<crate::plots::Figure>> {
+) -> Result<(Vec<crate::plots::Figure>, Option<GifSummary>)> {
+    let mut gif_summary = None;
     if args.gif {
-        let every = gif.stride();
+        let stride = gif.stride();
         let frames: Vec<RgbImage> = gif.into_items().into_iter().map(|(_, f)| f).collect();
-        write_gif(
-            &args.out.join("track.gif"),
-            &frames,
-            1000 / 12 * every as u32,
-        )?;
+        let delay_ms = gif_delay_ms(stride);
+        write_gif(&args.out.join("track.gif"), &frames, delay_ms)?;
         written.push("track.gif".into());
+        gif_summary = Some(GifSummary {
+            frames: frames.len(),
+            tracked: records.len(),
+            stride,
+            delay_ms,
+        });
     }
     let figures = if args.plots || args.report {
-        all_figures(records, smoothed)?
+        let options = crate::plots::PlotOptions::of_tracker(&input.config)
+            .with_truth(truth_points(input.truth.as_deref()));
+        all_figures_with(records, smoothed, &options)?
     } else {
         Vec::new()
     };
@@ -717,7 +832,79 @@ fn write_animation_and_plots(
             }
         }
     }
-    Ok(figures)
+    Ok((figures, gif_summary))
+}
+
+/// The display time of a GIF frame that stands for `stride` frames: `stride` twelfths of a
+/// second, at most [`GIF_MAX_DELAY_MS`].
+pub fn gif_delay_ms(stride: usize) -> u32 {
+    u32::try_from(stride)
+        .unwrap_or(u32::MAX)
+        .saturating_mul(GIF_FRAME_MS)
+        .min(GIF_MAX_DELAY_MS)
+}
+
+/// The ground-truth boxes of an OTB folder as plot points (frame index = position).
+fn truth_points(truth: Option<&[Option<BoundingBox>]>) -> Vec<crate::plots::TruthAt> {
+    truth
+        .unwrap_or_default()
+        .iter()
+        .map(|b| crate::plots::TruthAt {
+            bbox: *b,
+            ..Default::default()
+        })
+        .collect()
+}
+
+/// The command line as typed, for the report: the program's file name and the arguments, each
+/// quoted for a POSIX shell when it holds anything but letters, digits and `-_.,/:=+@%`.
+pub fn command_line(args: impl IntoIterator<Item = std::ffi::OsString>) -> String {
+    let mut words = Vec::new();
+    for (i, a) in args.into_iter().enumerate() {
+        let a = a.to_string_lossy().into_owned();
+        let a = if i == 0 {
+            Path::new(&a)
+                .file_name()
+                .map_or(a.clone(), |n| n.to_string_lossy().into_owned())
+        } else {
+            a
+        };
+        let plain = !a.is_empty()
+            && a.chars()
+                .all(|c| c.is_alphanumeric() || "-_.,/:=+@%".contains(c));
+        words.push(if plain {
+            a
+        } else {
+            format!("'{}'", a.replace('\'', "'\\''"))
+        });
+    }
+    words.join(" ")
+}
+
+/// The report's metrics rows for the tracker of `config`: the region tracker has no partial
+/// state, so its status counts are locked / lost.
+fn tracker_rows(config: &TrackerConfig, summary: &Summary) -> Vec<(String, String)> {
+    let mut rows = summary_rows(summary);
+    if config.region.is_some()
+        && let Some([l, _, o]) = summary.status_counts
+    {
+        for (name, value) in &mut rows {
+            if name == "frames locked / partial / lost" {
+                let unstated = summary.frames.saturating_sub(l + o);
+                *name = "frames locked / lost".to_owned();
+                *value = format!("{l} / {o}{}", crate::report::unstated_text(unstated));
+            }
+        }
+    }
+    rows
+}
+
+/// Notes under the report's metrics: what the ESS means for this tracker, what its status
+/// probabilities are.
+fn report_notes(config: &TrackerConfig, summary: &Summary) -> Vec<String> {
+    let mut notes = crate::report::standard_notes(summary);
+    notes.push(crate::report::ess_note(config.region.is_some()));
+    notes
 }
 
 /// The overlays kept for the report's strip: all of them when the frames were picked in
@@ -751,14 +938,20 @@ struct Kept {
 }
 
 impl Kept {
-    fn new(known_frames: Option<usize>, start: usize) -> Self {
-        // With a known length the GIF takes every k-th overlay and the strip fixed frames, as
-        // before; a stream keeps evenly spaced frames in bounded memory ([`Thinned`]).
-        Self {
-            gif: Thinned::new(
-                GIF_MAX_FRAMES,
-                known_frames.map_or(1, |n| n.div_ceil(GIF_MAX_FRAMES)),
+    fn new(args: &Args, known_frames: Option<usize>, start: usize) -> Self {
+        // With a known length the GIF takes every k-th overlay and the strip fixed frames; a
+        // stream keeps evenly spaced frames in bounded memory ([`Thinned`]). A stride the user
+        // gives is kept, and the GIF ends when it is full.
+        let cap = args.gif_frames as usize;
+        let gif = match args.gif_stride {
+            Some(k) => Thinned::truncating(cap, k as usize),
+            None => Thinned::new(
+                cap,
+                known_frames.map_or(1, |n| n.saturating_sub(start).div_ceil(cap)),
             ),
+        };
+        Self {
+            gif,
             strip: Thinned::new(2 * STRIP_FRAMES, 1),
             strip_known: known_frames.map(|n| strip_indices(n - start, STRIP_FRAMES)),
             written: Vec::new(),
@@ -772,8 +965,9 @@ impl Kept {
     /// [`AppError::Write`] when the overlay PNG cannot be written.
     fn overlay(&mut self, args: &Args, index: usize, k: usize, img: RgbImage) -> Result<()> {
         if args.overlay {
-            let name = format!("overlay/{:04}.png", index + 1);
-            write_png(&args.out.join(&name), &img)?;
+            let format = args.overlay_format;
+            let name = format!("overlay/{:04}.{}", index + 1, format.extension());
+            format.write(&args.out.join(&name), &img)?;
             self.written.push(name);
         }
         if args.report {
@@ -799,8 +993,8 @@ fn stream_progress(quiet: bool) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new_spinner();
-    if let Ok(style) = ProgressStyle::with_template("{msg} {pos} frames, {per_sec}") {
-        bar.set_style(style);
+    if let Ok(style) = ProgressStyle::with_template("{msg} {pos} frames, {rate}") {
+        bar.set_style(style.with_key("rate", rate_key));
     }
     bar
 }
@@ -819,8 +1013,15 @@ fn score(
 
 fn print_summary(s: &Summary, out: &Path) -> Result<()> {
     let mut text = format!(
-        "{}: {} frames with {} ({} particles) at {:.1} frames/s\n",
-        s.sequence, s.frames, s.tracker, s.particles, s.fps
+        "{}: {} frames with {} ({} particles) at {:.1} frames/s tracking alone{}\n",
+        s.sequence,
+        s.frames,
+        s.tracker,
+        s.particles,
+        s.fps,
+        s.wall_seconds
+            .map(|w| format!(", {:.1} frames/s wall clock", s.frames as f64 / w.max(1e-9)))
+            .unwrap_or_default()
     );
     if let Some(m) = &s.metrics {
         text.push_str(&format!(
@@ -834,13 +1035,139 @@ fn print_summary(s: &Summary, out: &Path) -> Result<()> {
         ));
     }
     if let Some(c) = s.status_counts {
+        let unstated = s.frames.saturating_sub(c.iter().sum());
         text.push_str(&format!(
-            "  status: {} locked, {} partial, {} lost\n",
+            "  status: {} locked, {} partial, {} lost{}\n",
             c[TrackStatus::Locked.index()],
             c[TrackStatus::PartiallyOccluded.index()],
-            c[TrackStatus::Lost.index()]
+            c[TrackStatus::Lost.index()],
+            crate::report::unstated_text(unstated)
         ));
     }
+
     text.push_str(&format!("  outputs in {}\n", out.display()));
     crate::output::print_stdout(&text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::{Arc, Mutex};
+
+    /// A terminal that keeps what is drawn on it.
+    #[derive(Debug, Clone, Default)]
+    struct Screen(Arc<Mutex<String>>);
+
+    impl indicatif::TermLike for Screen {
+        fn width(&self) -> u16 {
+            200
+        }
+        fn move_cursor_up(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn move_cursor_down(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn move_cursor_right(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn move_cursor_left(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn write_line(&self, s: &str) -> std::io::Result<()> {
+            self.write_str(&format!("{s}\n"))
+        }
+        fn write_str(&self, s: &str) -> std::io::Result<()> {
+            self.0.lock().unwrap().push_str(s);
+            Ok(())
+        }
+        fn clear_line(&self) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn flush(&self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn the_progress_bar_shows_total_eta_and_a_rate_with_one_decimal() {
+        let screen = Screen::default();
+        let bar = progress_to(
+            40,
+            "m1 on clip",
+            ProgressDrawTarget::term_like(Box::new(screen.clone())),
+        );
+        for _ in 0..12 {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+            bar.inc(1);
+        }
+        bar.abandon();
+        let text = screen.0.lock().unwrap().clone();
+        let last = text.lines().rev().find(|l| !l.trim().is_empty()).unwrap();
+        assert!(
+            last.contains("m1 on clip") && last.contains("12/40 frames"),
+            "{last}"
+        );
+        assert!(last.contains("eta "), "{last}");
+        // "NNN.N frames/s": one decimal, never indicatif's four.
+        let rate = last.split(", ").find(|p| p.ends_with("frames/s")).unwrap();
+        let number = rate.trim_end_matches(" frames/s");
+        assert_eq!(number.split('.').nth(1).map(str::len), Some(1), "{last}");
+        assert_eq!(rate_text(12.345_67), "12.3 frames/s");
+        assert_eq!(rate_text(f64::NAN), "– frames/s");
+    }
+
+    #[test]
+    fn the_prescan_moves_its_progress_bar_once_per_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        for k in 1..=5 {
+            image::RgbImage::new(8, 6)
+                .save(dir.path().join(format!("{k}.png")))
+                .unwrap();
+        }
+        let source = crate::sequence::open_sequence(dir.path().to_str().unwrap())
+            .unwrap()
+            .source;
+        let bar = ProgressBar::hidden();
+        bar.set_length(5);
+        let seen = std::cell::RefCell::new(Vec::new());
+        let info = prescan(&source, &bar, &|| {
+            seen.borrow_mut().push(bar.position());
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(info.frames, 5);
+        assert_eq!(*seen.borrow(), vec![1, 2, 3, 4, 5]);
+        // A stop (a signal) ends the pre-scan at once.
+        let stopped = prescan(&source, &ProgressBar::hidden(), &|| {
+            Err(AppError::setting("signal", "stop"))
+        });
+        assert!(stopped.is_err());
+    }
+
+    #[test]
+    fn the_command_line_is_quoted_for_a_shell() {
+        let args = [
+            "/opt/bin/track",
+            "run",
+            "my clips/a.mp4",
+            "--init",
+            "-20,-20,44,56",
+            "--out",
+            "it's",
+        ]
+        .map(std::ffi::OsString::from);
+        assert_eq!(
+            command_line(args),
+            "track run 'my clips/a.mp4' --init -20,-20,44,56 --out 'it'\\''s'"
+        );
+    }
+
+    #[test]
+    fn gif_frames_show_longer_for_a_larger_stride_up_to_a_quarter_second() {
+        assert_eq!(gif_delay_ms(1), 83);
+        assert_eq!(gif_delay_ms(2), 166);
+        assert_eq!(gif_delay_ms(4), GIF_MAX_DELAY_MS);
+        assert_eq!(gif_delay_ms(usize::MAX), GIF_MAX_DELAY_MS);
+    }
 }

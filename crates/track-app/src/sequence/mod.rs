@@ -180,6 +180,8 @@ pub enum Source {
         frames: Y4mSource,
         /// Stops ffmpeg early.
         ffmpeg: video::FfmpegHandle,
+        /// The number of frames ffprobe expects ([`video::probe_frame_count`]), for progress.
+        expected: Option<usize>,
     },
 }
 
@@ -238,6 +240,15 @@ impl Source {
         }
     }
 
+    /// The number of frames a stream is expected to hold, for a progress bar: ffprobe's count
+    /// for a video file, else [`FrameSource::len`]. Not a promise: the frames read decide.
+    pub fn expected_frames(&self) -> Option<usize> {
+        match self {
+            Source::Video { expected, .. } => *expected,
+            other => other.len(),
+        }
+    }
+
     /// Stops the decoder of a video (ffmpeg) so that a reader blocked on it returns; nothing for
     /// other sources.
     pub fn stopper(&self) -> Option<video::FfmpegHandle> {
@@ -287,12 +298,14 @@ pub fn open_sequence(spec: &str) -> Result<Sequence> {
     }
     if path.is_file() {
         if video::is_video_path(path) {
+            let expected = video::probe_frame_count(path);
             let (reader, ffmpeg) = video::FfmpegReader::spawn(path)?;
             return Ok(Sequence {
                 kind: SequenceKind::Video,
                 source: Source::Video {
                     frames: Y4mSource::from_reader(reader, path)?,
                     ffmpeg,
+                    expected,
                 },
                 groundtruth: None,
                 name,

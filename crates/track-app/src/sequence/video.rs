@@ -8,6 +8,11 @@
 //! is linked: ffmpeg reads every format, and a missing ffmpeg is one clear error
 //! ([`FFMPEG`] not on `PATH`).
 //!
+//! The number of frames, for the progress bar only, is asked of `ffprobe` first
+//! ([`probe_frame_count`]): the stream's `nb_frames` when the container states it, else its
+//! duration times its average frame rate. A missing ffprobe or an answer without either just
+//! leaves the count unknown.
+//!
 //! The child process never outlives its reader: it is killed and reaped when the reader is dropped
 //! (an early error, the end of a run) and when [`FfmpegHandle::stop`] is called (a run stopped by
 //! a signal); at the end of its output it is waited for, and a failure (a nonzero exit status)
@@ -23,6 +28,60 @@ use crate::{AppError, Result};
 
 /// The program run to decode video files, looked up on `PATH`.
 pub const FFMPEG: &str = "ffmpeg";
+
+/// The program asked for a video's frame count, looked up on `PATH`.
+pub const FFPROBE: &str = "ffprobe";
+
+/// The number of frames of the first video stream of `path` as ffprobe states it (see
+/// [`frame_count_from_probe`]); `None` when ffprobe is missing, fails or does not know.
+pub fn probe_frame_count(path: &Path) -> Option<usize> {
+    let mut input = std::ffi::OsString::from("file:");
+    input.push(path.as_os_str());
+    let out = Command::new(FFPROBE)
+        .args([
+            "-v",
+            "error",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=nb_frames,duration,avg_frame_rate:format=duration",
+            "-of",
+            "flat",
+        ])
+        .arg(&input)
+        .stdin(Stdio::null())
+        .stderr(Stdio::null())
+        .output()
+        .ok()?;
+    if !out.status.success() {
+        return None;
+    }
+    frame_count_from_probe(&String::from_utf8_lossy(&out.stdout))
+}
+
+/// The frame count in ffprobe's `-of flat` answer: `streams.stream.0.nb_frames` when it is a
+/// positive number, else the stream's duration (or the container's) times the stream's
+/// `avg_frame_rate` (`num/den`), rounded; `None` when neither is known ("N/A").
+pub fn frame_count_from_probe(text: &str) -> Option<usize> {
+    let value = |key: &str| -> Option<&str> {
+        text.lines().find_map(|l| {
+            let (k, v) = l.split_once('=')?;
+            (k.trim() == key).then(|| v.trim().trim_matches('"'))
+        })
+    };
+    if let Some(n) = value("streams.stream.0.nb_frames").and_then(|v| v.parse::<usize>().ok())
+        && n > 0
+    {
+        return Some(n);
+    }
+    let seconds = value("streams.stream.0.duration")
+        .and_then(|v| v.parse::<f64>().ok())
+        .or_else(|| value("format.duration").and_then(|v| v.parse::<f64>().ok()))?;
+    let (num, den) = value("streams.stream.0.avg_frame_rate")?.split_once('/')?;
+    let rate = num.parse::<f64>().ok()? / den.parse::<f64>().ok()?;
+    let n = (seconds * rate).round();
+    (1.0..1e12).contains(&n).then_some(n as usize)
+}
 
 /// How much of ffmpeg's standard error is kept for messages, bytes (its last lines).
 const STDERR_TAIL: usize = 2048;
@@ -229,4 +288,24 @@ pub fn is_video_path(path: &Path) -> bool {
             .extension()
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("y4m"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_count_from_nb_frames_or_duration_times_rate() {
+        let mp4 = "streams.stream.0.avg_frame_rate=\"25/1\"\nstreams.stream.0.duration=\"22.920000\"\n\
+                   streams.stream.0.nb_frames=\"573\"\nformat.duration=\"22.920000\"\n";
+        assert_eq!(frame_count_from_probe(mp4), Some(573));
+        // Matroska states no frame count: 9.6 s at 30000/1001 frames/s is 288 frames.
+        let mkv = "streams.stream.0.avg_frame_rate=\"30000/1001\"\nstreams.stream.0.duration=\"N/A\"\n\
+                   streams.stream.0.nb_frames=\"N/A\"\nformat.duration=\"9.609000\"\n";
+        assert_eq!(frame_count_from_probe(mkv), Some(288));
+        let unknown = "streams.stream.0.avg_frame_rate=\"0/0\"\nstreams.stream.0.duration=\"N/A\"\n\
+                   streams.stream.0.nb_frames=\"N/A\"\nformat.duration=\"N/A\"\n";
+        assert_eq!(frame_count_from_probe(unknown), None);
+        assert_eq!(frame_count_from_probe(""), None);
+    }
 }

@@ -38,6 +38,8 @@ pub(super) struct Tracked {
     pub smoothed: Option<Vec<FrameRecord>>,
     /// Frames read from the input, skipped ones included.
     pub frames_read: usize,
+    /// Wall-clock seconds of the whole run until the end of tracking (set by the caller).
+    pub wall_seconds: f64,
     /// Why the run stopped before the end of the input: a signal or an error of the input or
     /// the tracker.
     pub stop: Option<AppError>,
@@ -127,6 +129,7 @@ impl Frames<'_> {
             smoothed,
             output: session.finish(),
             frames_read,
+            wall_seconds: 0.0,
             stop,
         })
     }

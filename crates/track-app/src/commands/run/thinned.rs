@@ -8,6 +8,8 @@ pub struct Thinned<T> {
     items: Vec<(usize, T)>,
     stride: usize,
     cap: usize,
+    /// Keep the stride and stop at `cap` items instead of thinning ([`Thinned::truncating`]).
+    truncate: bool,
 }
 
 impl<T> Thinned<T> {
@@ -18,12 +20,24 @@ impl<T> Thinned<T> {
             items: Vec::new(),
             stride: stride.max(1),
             cap: cap.max(2),
+            truncate: false,
+        }
+    }
+
+    /// Keeps every `stride`-th item (at least 1) until `cap` items (at least 1) are kept, and
+    /// none after: a fixed stride asked for by the user, which is never changed.
+    pub fn truncating(cap: usize, stride: usize) -> Self {
+        Self {
+            items: Vec::new(),
+            stride: stride.max(1),
+            cap: cap.max(1),
+            truncate: true,
         }
     }
 
     /// Whether item `k` would be kept now (to skip building items that would be dropped).
     pub fn wants(&self, k: usize) -> bool {
-        k.is_multiple_of(self.stride)
+        k.is_multiple_of(self.stride) && !(self.truncate && self.items.len() >= self.cap)
     }
 
     /// Offers item `k` (indices increase from 0).
@@ -32,7 +46,7 @@ impl<T> Thinned<T> {
             return;
         }
         self.items.push((k, item));
-        if self.items.len() > self.cap {
+        if !self.truncate && self.items.len() > self.cap {
             let stride = 2 * self.stride;
             self.items.retain(|(i, _)| i.is_multiple_of(stride));
             self.stride = stride;
@@ -72,6 +86,22 @@ mod tests {
                     .all(|(i, &(k, v))| k == i * stride && v == k)
             );
         }
+    }
+
+    #[test]
+    fn a_truncating_subset_keeps_its_stride_and_stops_at_cap() {
+        let mut t = Thinned::truncating(4, 3);
+        for k in 0..100 {
+            t.push(k, k);
+        }
+        assert_eq!(t.stride(), 3);
+        let ks: Vec<usize> = t.into_items().into_iter().map(|(k, _)| k).collect();
+        assert_eq!(ks, vec![0, 3, 6, 9]);
+        let mut short = Thinned::truncating(150, 2);
+        for k in 0..7 {
+            short.push(k, ());
+        }
+        assert_eq!(short.into_items().len(), 4);
     }
 
     #[test]
