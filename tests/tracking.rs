@@ -130,7 +130,7 @@ fn motion_proposal_survives_abrupt_motion_that_breaks_tight_condensation() {
     // On this textured scene the clusters that hold particles get their own motion estimates:
     // at least one is estimated every frame (clusters left empty by k-means are not counted, see
     // `Estimate::motion_clusters`), and falling back to the prior prediction is rare — it happens
-    // only where the estimator flags its fit as unreliable (`MotionEstimate::reliable`), as
+    // only where the estimator flags its fit as unreliable (`motion_est::Error::Unreliable`), as
     // while the distractor crosses the target.
     let mut frames_with_fallbacks = 0;
     for (k, e) in m3_estimates.iter().enumerate().skip(1) {

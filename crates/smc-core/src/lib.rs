@@ -113,3 +113,28 @@ pub use smooth::{
     BackwardMethod, SmoothedMarginals, SmootherSettings, Trajectories, sample_trajectories,
     smooth_marginals,
 };
+
+#[cfg(test)]
+mod readme_tests {
+    /// The README's example compiles as a doctest against this crate's own `rand`, whatever an
+    /// application's `cargo add rand` picks; it only holds for a user if the example imports the
+    /// generator traits through the re-exports, which this checks (issue 28).
+    #[test]
+    fn the_examples_import_rand_through_the_re_exports() {
+        for (name, text) in [
+            ("README.md", include_str!("../README.md")),
+            ("lib.rs", include_str!("lib.rs")),
+        ] {
+            let code_lines = text
+                .lines()
+                .map(|l| l.trim_start_matches("//!").trim())
+                .filter(|l| l.starts_with("use "));
+            for line in code_lines {
+                assert!(
+                    !(line.starts_with("use rand::") || line.starts_with("use rand_distr::")),
+                    "{name}: `{line}` names the application's rand, not smc_core::rand"
+                );
+            }
+        }
+    }
+}

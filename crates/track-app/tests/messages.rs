@@ -121,7 +121,6 @@ fn configuration_files_that_do_not_parse_or_hold_bad_values_are_both_exit_2() {
             wild.to_string(),
             "dynamics.sigma_translation`: 1e308 is outside (0, 1000]",
         ),
-
         ("missing.json", String::new(), "cannot read"),
     ];
     for (name, text, what) in cases {

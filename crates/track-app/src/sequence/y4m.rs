@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use image::{GrayImage, Luma, RgbImage};
-use vision_core::GreyBuffer;
+use vision_core::{GreyBuffer, ToGreyBuffer};
 
 use super::{Frame, FrameSource, Original, SequenceInfo};
 use crate::{AppError, Result};
@@ -228,9 +228,10 @@ fn read_frame_raw(
 fn convert_frame(header: &Y4mHeader, raw: &[u8]) -> (GreyBuffer, Original) {
     let (w, h) = (header.width, header.height);
     let luma = &raw[..w * h];
-    let grey = GreyBuffer::from_fn(w as u32, h as u32, |x, y| {
-        Luma([f32::from(luma[y as usize * w + x as usize])])
-    });
+    // The luma plane as an 8-bit grey image, through the one conversion to grey levels.
+    let grey = image::ImageBuffer::<Luma<u8>, &[u8]>::from_raw(w as u32, h as u32, luma)
+        .map(|plane| plane.to_grey_buffer())
+        .unwrap_or_else(|| GreyBuffer::new(w as u32, h as u32));
     let (cw, (sub_x, sub_y)) = match header.colour {
         Y4mColour::Mono => {
             let img = GrayImage::from_raw(w as u32, h as u32, luma.to_vec());
