@@ -212,12 +212,12 @@ fn y4m_with_unsupported_colour_space_or_truncated_frame_is_rejected() {
     let bad_colour = dir.path().join("c422.y4m");
     std::fs::write(
         &bad_colour,
-        y4m("YUV4MPEG2 W8 H8 F25:1 C422", &[&[0u8; 128]]),
+        y4m("YUV4MPEG2 W8 H8 F25:1 C411", &[&[0u8; 128]]),
     )
     .unwrap();
     let err = run_fails(dir.path(), s(&bad_colour), &["--init", "1,1,4,4"]);
     assert_eq!(err.exit_code(), 3);
-    assert!(err.to_string().contains("C422"), "{err}");
+    assert!(err.to_string().contains("C411"), "{err}");
 
     let truncated = dir.path().join("cut.y4m");
     let full = [0u8; 96];

@@ -8,6 +8,13 @@ use std::process::Command;
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(ffmpeg_missing)");
     println!("cargo::rerun-if-env-changed=PATH");
+    // Installing ffmpeg adds a file to a folder on PATH, which changes that folder's time: the
+    // script runs again and the tests stop being ignored.
+    if let Some(path) = std::env::var_os("PATH") {
+        for dir in std::env::split_paths(&path).filter(|d| d.is_dir()) {
+            println!("cargo::rerun-if-changed={}", dir.display());
+        }
+    }
     println!("cargo::rerun-if-env-changed=TRACK_REQUIRE_FFMPEG");
     println!("cargo::rerun-if-env-changed=TRACK_SKIP_FFMPEG_TESTS");
     let set = |name: &str| std::env::var(name).is_ok_and(|v| v == "1");
