@@ -56,6 +56,30 @@ pub struct Estimate {
     pub millis: f64,
 }
 
+impl Estimate {
+    /// The status this estimate reports: α̂ when the tracker has the status HMM, else from γ̂
+    /// ([`status_from_gamma`]), else locked.
+    pub fn track_status(&self) -> vision_core::TrackStatus {
+        if let Some(s) = &self.status {
+            return s.alpha_hat;
+        }
+        self.gamma
+            .map_or(vision_core::TrackStatus::Locked, status_from_gamma)
+    }
+}
+
+/// Tracker status thresholds on γ̂ for trackers that estimate occlusion but not α: the ranges of
+/// Wu §6.3 (locked γ ≤ 0.2, lost γ ≥ 0.8, partially occluded between).
+pub fn status_from_gamma(gamma: f64) -> vision_core::TrackStatus {
+    if gamma <= 0.2 {
+        vision_core::TrackStatus::Locked
+    } else if gamma < 0.8 {
+        vision_core::TrackStatus::PartiallyOccluded
+    } else {
+        vision_core::TrackStatus::Lost
+    }
+}
+
 /// The point estimates of one step, before they become an [`Estimate`].
 struct PosteriorSummary {
     state: StateVector,

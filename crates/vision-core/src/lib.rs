@@ -12,5 +12,5 @@ mod status;
 
 pub use error::{Error, Result};
 pub use geometry::{BoundingBox, Ellipse};
-pub use image::{GreyBuffer, GreyImage};
+pub use image::{GreyBuffer, GreyImage, luma_bt601};
 pub use status::{FAILURE_IOU, FAILURE_RUN, TrackStatus, first_failure};

@@ -51,7 +51,7 @@ pub fn grey_from_luma8(img: &GrayImage) -> GreyBuffer {
 pub fn grey_from_rgb8(img: &RgbImage) -> GreyBuffer {
     GreyBuffer::from_fn(img.width(), img.height(), |x, y| {
         let p = img.get_pixel(x, y);
-        Luma([0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2])])
+        Luma([vision_core::luma_bt601(p[0], p[1], p[2])])
     })
 }
 
