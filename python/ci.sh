@@ -24,4 +24,6 @@ start=$(date +%s)
 "$venv/bin/python" -m pip install --quiet "$repo/python" pytest numpy
 echo "python/ci.sh: pip install took $(( $(date +%s) - start )) s"
 cd "$repo/python"
-"$venv/bin/python" -m pytest -q -p no:cacheprovider tests
+# The pytest script, not `python -m pytest`: the latter puts python/ on sys.path, where the
+# contour_track source folder (without its compiled extension) would shadow the installed package.
+"$venv/bin/pytest" -q -p no:cacheprovider tests

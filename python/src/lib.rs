@@ -215,9 +215,6 @@ impl Status {
     }
 }
 
-/// Tracker(preset=None, particles=None, seed=None, config=None)
-/// --
-///
 /// A particle-filter tracker, shaped like OpenCV's trackers (`cv2.TrackerCSRT` and friends).
 ///
 /// Arguments:
@@ -572,11 +569,12 @@ impl Motion {
     }
 
     fn __repr__(&self) -> String {
+        let py_bool = |b: bool| if b { "True" } else { "False" };
         format!(
             "Motion(model={:?}, reliable={}, converged={}, params={:?}, inlier_fraction={:.3})",
             self.model(),
-            self.estimate.reliable,
-            self.estimate.converged,
+            py_bool(self.estimate.reliable),
+            py_bool(self.estimate.converged),
             self.estimate.params,
             self.estimate.inlier_fraction
         )
