@@ -17,7 +17,7 @@ use numpy::{
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use vision_core::luma_bt601;
+use vision_core::{GreyImage, luma_bt601};
 
 use crate::FrameError;
 
@@ -172,7 +172,10 @@ impl FrameBuffers {
             FrameView::GreyU8(a) => {
                 let (h, w) = a.dim();
                 self.grey.clear();
-                self.grey.extend(a.iter().map(|&v| f32::from(v)));
+                match a.as_slice() {
+                    Some(pixels) => self.grey.extend(pixels.iter().map(|&v| f32::from(v))),
+                    None => self.grey.extend(a.iter().map(|&v| f32::from(v))),
+                }
                 trackers::Frame::new(w, h, &self.grey)
             }
             FrameView::ColourU8(a) => {
@@ -185,11 +188,14 @@ impl FrameBuffers {
                         trackers::Frame::with_rgb(w, h, &self.grey, pixels)
                     }
                     (Some(pixels), ChannelOrder::Bgr) => {
-                        self.rgb.clear();
-                        self.rgb.reserve(pixels.len());
-                        for p in pixels.chunks_exact(3) {
-                            self.grey.push(luma_bt601(p[2], p[1], p[0]));
-                            self.rgb.extend_from_slice(&[p[2], p[1], p[0]]);
+                        // Sized once, then written in one pass without per-pixel capacity checks.
+                        self.grey.resize(w * h, 0.0);
+                        self.rgb.resize(pixels.len(), 0);
+                        let out = self.grey.iter_mut().zip(self.rgb.chunks_exact_mut(3));
+                        for ((g, o), p) in out.zip(pixels.chunks_exact(3)) {
+                            let (r, gr, b) = (p[2], p[1], p[0]);
+                            *g = luma_bt601(r, gr, b);
+                            o.copy_from_slice(&[r, gr, b]);
                         }
                         trackers::Frame::with_rgb(w, h, &self.grey, &self.rgb)
                     }
@@ -206,17 +212,23 @@ impl FrameBuffers {
             }
             FrameView::GreyF32(a) => {
                 let (h, w) = a.dim();
-                if let Some(i) = a.iter().position(|v| !v.is_finite()) {
-                    return Err(non_finite(i / w, i % w));
-                }
-                match a.as_slice() {
-                    Some(data) => trackers::Frame::new(w, h, data),
+                let data = match a.as_slice() {
+                    Some(data) => data,
                     None => {
                         self.grey.clear();
                         self.grey.extend(a.iter().copied());
-                        trackers::Frame::new(w, h, &self.grey)
+                        &self.grey
                     }
-                }
+                };
+                // One pass checks every value, the trackers' own check (`GreyImage::new`); its
+                // error gives the first non-finite pixel's index.
+                return match GreyImage::new(w, h, data) {
+                    Ok(grey) => Ok(grey.into()),
+                    Err(vision_core::Error::NonFinite { index }) => {
+                        Err(non_finite(index / w, index % w))
+                    }
+                    Err(e) => Err(FrameError::Value(format!("frame: {e}"))),
+                };
             }
             FrameView::ColourF32(a) => {
                 let (h, w, _) = a.dim();
