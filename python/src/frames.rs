@@ -3,8 +3,8 @@
 //!
 //! * `uint8` H×W: grey levels as they are, no colour (as a grey PNG in an image folder).
 //! * `uint8` H×W×3, BGR (OpenCV's order, the default) or RGB: grey by
-//!   [`vision_core::luma_bt601`], and the RGB pixels (as a colour PNG). An RGB C-contiguous
-//!   frame's pixels are borrowed, not copied.
+//!   [`vision_core::luma_bt601`], and the colour pixels (as a colour PNG). A C-contiguous
+//!   frame's pixels are borrowed, not copied, in either order (`trackers::Frame::with_bgr`).
 //! * `float32` H×W: grey levels, borrowed when C-contiguous; every value must be finite.
 //! * `float32` H×W×3: colour in 0–255; grey by the same weights in f32, and the RGB pixels rounded
 //!   (an integer-valued float frame gives the trackers exactly what its `uint8` twin gives).
@@ -188,16 +188,10 @@ impl FrameBuffers {
                         trackers::Frame::with_rgb(w, h, &self.grey, pixels)
                     }
                     (Some(pixels), ChannelOrder::Bgr) => {
-                        // Sized once, then written in one pass without per-pixel capacity checks.
-                        self.grey.resize(w * h, 0.0);
-                        self.rgb.resize(pixels.len(), 0);
-                        let out = self.grey.iter_mut().zip(self.rgb.chunks_exact_mut(3));
-                        for ((g, o), p) in out.zip(pixels.chunks_exact(3)) {
-                            let (r, gr, b) = (p[2], p[1], p[0]);
-                            *g = luma_bt601(r, gr, b);
-                            o.copy_from_slice(&[r, gr, b]);
-                        }
-                        trackers::Frame::with_rgb(w, h, &self.grey, &self.rgb)
+                        // OpenCV's order is read in place by the trackers: no reordered copy.
+                        self.grey
+                            .extend(pixels.chunks_exact(3).map(|p| luma_bt601(p[2], p[1], p[0])));
+                        trackers::Frame::with_bgr(w, h, &self.grey, pixels)
                     }
                     (None, _) => {
                         self.rgb.clear();
