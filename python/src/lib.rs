@@ -230,8 +230,8 @@ impl Status {
 /// Frames (for `init` and `update`) are numpy arrays:
 ///     uint8 H×W×3 colour, BGR as `cv2.imread` gives (pass `rgb=True` for RGB, e.g. Pillow);
 ///     uint8 H×W grey; float32 H×W grey levels (0–255); float32 H×W×3 colour in 0–255.
-///     Any strides (slices, Fortran order); C-contiguous grey float32 and RGB uint8 frames are
-///     read in place, without a copy. A colour frame becomes grey by the BT.601 weights, as
+///     Any strides (slices, Fortran order); C-contiguous uint8 colour frames (BGR or RGB) and
+///     float32 grey frames are read in place, without a copy. A colour frame becomes grey by the BT.601 weights, as
 ///     `track run` does with colour images; a grey image stays grey (read grey footage with
 ///     `cv2.IMREAD_GRAYSCALE` for the same boxes as `track run`).
 ///
