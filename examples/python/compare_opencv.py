@@ -155,6 +155,10 @@ def main():
     args = parser.parse_args()
     if cv2 is None:
         print("OpenCV is not installed (pip install opencv-contrib-python-headless): running contour_track alone", file=sys.stderr)
+        try:
+            import PIL  # noqa: F401
+        except ImportError:
+            raise SystemExit("without OpenCV, frames are decoded with Pillow: pip install pillow")
     totals = {}
     print(f"{'sequence':<24} {'tracker':<26} {'AUC':>6} {'P@20':>6} {'frames/s':>9}")
     for folder in args.sequences:
