@@ -669,4 +669,49 @@ mod tests {
             Err(Error::UnknownPreset { .. })
         ));
     }
+
+    #[test]
+    fn configurations_parse_as_track_config_prints_them() {
+        for preset in Preset::ALL {
+            let c = preset.config(DEFAULT_PARTICLES, DEFAULT_SEED);
+            let json = serde_json::to_string_pretty(&c).unwrap();
+            assert_eq!(TrackerConfig::parse(&json, ConfigFormat::Json).unwrap(), c);
+            let toml = toml::to_string_pretty(&c).unwrap();
+            assert_eq!(TrackerConfig::parse(&toml, ConfigFormat::Toml).unwrap(), c);
+        }
+        let e = TrackerConfig::parse("{", ConfigFormat::Json).unwrap_err();
+        assert!(e.starts_with("invalid JSON: "), "{e}");
+        let e = TrackerConfig::parse("name = \"x\"\nparticles = \"many\"\n", ConfigFormat::Toml)
+            .unwrap_err();
+        assert!(e.starts_with("invalid TOML at line 2, column "), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+
+    #[test]
+    fn config_format_follows_the_extension() {
+        use std::path::Path;
+        assert_eq!(
+            ConfigFormat::of_path(Path::new("a.toml")),
+            ConfigFormat::Toml
+        );
+        assert_eq!(
+            ConfigFormat::of_path(Path::new("a.TOML")),
+            ConfigFormat::Toml
+        );
+        assert_eq!(
+            ConfigFormat::of_path(Path::new("a.json")),
+            ConfigFormat::Json
+        );
+        assert_eq!(ConfigFormat::of_path(Path::new("a")), ConfigFormat::Json);
+    }
+
+    #[test]
+    fn every_preset_has_a_one_line_description() {
+        let mut seen = std::collections::HashSet::new();
+        for preset in Preset::ALL {
+            let d = preset.description();
+            assert!(!d.is_empty() && !d.contains('\n'), "{d}");
+            assert!(seen.insert(d), "{d} twice");
+        }
+    }
 }
