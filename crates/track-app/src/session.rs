@@ -52,25 +52,11 @@ impl Default for DrawOptions {
     }
 }
 
-/// Tracker status thresholds on γ̂ for trackers that estimate occlusion but not α: the ranges of
-/// Wu §6.3 (locked γ ≤ 0.2, lost γ ≥ 0.8, partially occluded between).
-pub fn status_from_gamma(gamma: f64) -> TrackStatus {
-    if gamma <= 0.2 {
-        TrackStatus::Locked
-    } else if gamma < 0.8 {
-        TrackStatus::PartiallyOccluded
-    } else {
-        TrackStatus::Lost
-    }
-}
+pub use trackers::status_from_gamma;
 
-/// The status shown for an estimate: α̂ when the tracker has the status HMM, else from γ̂, else
-/// locked.
+/// The status shown for an estimate ([`trackers::Estimate::track_status`]).
 pub fn display_status(e: &Estimate) -> TrackStatus {
-    if let Some(s) = &e.status {
-        return s.alpha_hat;
-    }
-    e.gamma.map_or(TrackStatus::Locked, status_from_gamma)
+    e.track_status()
 }
 
 /// Whether the estimate carries a tracker status: α̂ of a status process, or γ̂ read as one.

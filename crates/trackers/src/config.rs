@@ -383,6 +383,62 @@ pub const MAX_PARTICLES: usize = 1_000_000;
 /// Most Lloyd iterations of the motion clustering (it settles in a handful).
 pub const MAX_CLUSTER_ITERATIONS: usize = 100;
 
+/// Number of particles of a preset when the caller names none (`track run`, `track config`, the
+/// Python binding).
+pub const DEFAULT_PARTICLES: usize = 200;
+
+/// Seed of a preset when the caller names none.
+pub const DEFAULT_SEED: u64 = 1;
+
+/// The text format of a tracker configuration, as `track config` prints it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ConfigFormat {
+    /// JSON (`track config PRESET`).
+    Json,
+    /// TOML (`track config PRESET --toml`).
+    Toml,
+}
+
+impl ConfigFormat {
+    /// The format of a configuration file: TOML for a `.toml` extension (any case), JSON
+    /// otherwise.
+    pub fn of_path(path: &std::path::Path) -> Self {
+        let is_toml = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+        if is_toml { Self::Toml } else { Self::Json }
+    }
+}
+
+impl TrackerConfig {
+    /// Parses a configuration written as `track config` prints it. Does not validate it
+    /// ([`TrackerConfig::validate`]).
+    ///
+    /// # Errors
+    /// A one-line message: `invalid JSON: …`, or `invalid TOML at line L, column C: …`.
+    pub fn parse(text: &str, format: ConfigFormat) -> std::result::Result<Self, String> {
+        match format {
+            ConfigFormat::Toml => toml::from_str(text).map_err(|e| {
+                // toml's own message draws the line with a caret over several lines; one line here.
+                let at = e
+                    .span()
+                    .map(|span| {
+                        let before = &text[..span.start.min(text.len())];
+                        let line = before.matches('\n').count() + 1;
+                        let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+                        format!(" at line {line}, column {column}")
+                    })
+                    .unwrap_or_default();
+                format!("invalid TOML{at}: {}", e.message().trim())
+            }),
+            ConfigFormat::Json => {
+                serde_json::from_str(text).map_err(|e| format!("invalid JSON: {e}"))
+            }
+        }
+    }
+}
+
 /// The named trackers of both papers, and the combination neither has.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -456,6 +512,30 @@ impl Preset {
                 name: name.to_owned(),
                 known: Self::ALL.map(Preset::name).join(", "),
             })
+    }
+
+    /// What the preset is, in one line (the table of the crate's documentation).
+    pub fn description(self) -> &'static str {
+        match self {
+            Preset::M1 => {
+                "Odobez M1 (CONDENSATION): Gaussian AR2 prior as proposal, shape likelihood"
+            }
+            Preset::M2 => "Odobez M2: M1 with the implicit motion likelihood (NCC patches)",
+            Preset::M3 => {
+                "Odobez M3: robust motion proposal, shape, implicit and explicit motion terms"
+            }
+            Preset::WFixed => {
+                "Wu: affine shape space, Poisson-clutter likelihood with one fixed lambda"
+            }
+            Preset::WSwitch => "Wu: clutter class beta switching among the learnt lambdas, no HMM",
+            Preset::WHmm => "Wu: the {beta, lambda} clutter HMM",
+            Preset::WOcc => "Wu: clutter HMM, occlusion gamma as a random walk, reacquisition",
+            Preset::WEval => "Wu: clutter HMM and the status HMM {alpha, gamma}, reacquisition",
+            Preset::Full => "Odobez's motion proposal with all of Wu's hidden processes",
+            Preset::Head => {
+                "recommended for real footage: colour, NCC template and contour contrast, lost/locked chain"
+            }
+        }
     }
 
     /// The preset's configuration with `particles` particles and `seed`.
@@ -658,5 +738,50 @@ mod tests {
             Preset::from_name("m9"),
             Err(Error::UnknownPreset { .. })
         ));
+    }
+
+    #[test]
+    fn configurations_parse_as_track_config_prints_them() {
+        for preset in Preset::ALL {
+            let c = preset.config(DEFAULT_PARTICLES, DEFAULT_SEED);
+            let json = serde_json::to_string_pretty(&c).unwrap();
+            assert_eq!(TrackerConfig::parse(&json, ConfigFormat::Json).unwrap(), c);
+            let toml = toml::to_string_pretty(&c).unwrap();
+            assert_eq!(TrackerConfig::parse(&toml, ConfigFormat::Toml).unwrap(), c);
+        }
+        let e = TrackerConfig::parse("{", ConfigFormat::Json).unwrap_err();
+        assert!(e.starts_with("invalid JSON: "), "{e}");
+        let e = TrackerConfig::parse("name = \"x\"\nparticles = \"many\"\n", ConfigFormat::Toml)
+            .unwrap_err();
+        assert!(e.starts_with("invalid TOML at line 2, column "), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+
+    #[test]
+    fn config_format_follows_the_extension() {
+        use std::path::Path;
+        assert_eq!(
+            ConfigFormat::of_path(Path::new("a.toml")),
+            ConfigFormat::Toml
+        );
+        assert_eq!(
+            ConfigFormat::of_path(Path::new("a.TOML")),
+            ConfigFormat::Toml
+        );
+        assert_eq!(
+            ConfigFormat::of_path(Path::new("a.json")),
+            ConfigFormat::Json
+        );
+        assert_eq!(ConfigFormat::of_path(Path::new("a")), ConfigFormat::Json);
+    }
+
+    #[test]
+    fn every_preset_has_a_one_line_description() {
+        let mut seen = std::collections::HashSet::new();
+        for preset in Preset::ALL {
+            let d = preset.description();
+            assert!(!d.is_empty() && !d.contains('\n'), "{d}");
+            assert!(seen.insert(d), "{d} twice");
+        }
     }
 }

@@ -74,10 +74,10 @@ mod visibility;
 pub mod working_scale;
 
 pub use config::{
-    AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, ClutterMode, MAX_CLUSTER_ITERATIONS,
-    MAX_PARTICLES, MotionSettings, OCCLUSION_ARC, OcclusionMode, PoseEstimator, Preset,
-    ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig, UNKNOWN_OCCLUDER_SHARE,
-    W_OCC_SIGMA_GAMMA,
+    AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, ClutterMode, ConfigFormat, DEFAULT_PARTICLES,
+    DEFAULT_SEED, MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings, OCCLUSION_ARC,
+    OcclusionMode, PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig,
+    UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA,
 };
 pub use dynamics::{DynamicsSettings, NoiseKind};
 pub use error::{Error, Result};
@@ -89,7 +89,7 @@ pub use region::{RegionSettings, RegionTracker};
 pub use smc_core::smooth::SmootherSettings;
 pub use smoothing::{ChainCounts, SmoothedRun, SwitchingStatistics};
 pub use space::{STATE_SLOTS, ShapeSpace, StateVector};
-pub use tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, build};
+pub use tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, build, status_from_gamma};
 pub use working_scale::{ScaledTracker, WorkingScale};
 
 // The types of `Estimate`'s public fields, and of a tracker's inputs, so that a user needs no

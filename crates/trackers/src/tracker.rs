@@ -56,6 +56,30 @@ pub struct Estimate {
     pub millis: f64,
 }
 
+impl Estimate {
+    /// The status this estimate reports: α̂ when the tracker has the status HMM, else from γ̂
+    /// ([`status_from_gamma`]), else locked.
+    pub fn track_status(&self) -> vision_core::TrackStatus {
+        if let Some(s) = &self.status {
+            return s.alpha_hat;
+        }
+        self.gamma
+            .map_or(vision_core::TrackStatus::Locked, status_from_gamma)
+    }
+}
+
+/// Tracker status thresholds on γ̂ for trackers that estimate occlusion but not α: the ranges of
+/// Wu §6.3 (locked γ ≤ 0.2, lost γ ≥ 0.8, partially occluded between).
+pub fn status_from_gamma(gamma: f64) -> vision_core::TrackStatus {
+    if gamma <= 0.2 {
+        vision_core::TrackStatus::Locked
+    } else if gamma < 0.8 {
+        vision_core::TrackStatus::PartiallyOccluded
+    } else {
+        vision_core::TrackStatus::Lost
+    }
+}
+
 /// The point estimates of one step, before they become an [`Estimate`].
 struct PosteriorSummary {
     state: StateVector,
@@ -785,4 +809,41 @@ fn propagate_and_weight<P: smc_core::Proposal<State = Particle>>(
 ) -> smc_core::Result<smc_core::WeightReport> {
     filter.propagate(set, proposal, seed, step);
     filter.weight(set, proposal, prior, observation, step)
+}
+
+#[cfg(test)]
+mod status_tests {
+    use super::*;
+    use crate::Preset;
+    use vision_core::TrackStatus;
+
+    #[test]
+    fn status_from_gamma_follows_wu_ranges() {
+        assert_eq!(status_from_gamma(0.0), TrackStatus::Locked);
+        assert_eq!(status_from_gamma(0.2), TrackStatus::Locked);
+        assert_eq!(status_from_gamma(0.21), TrackStatus::PartiallyOccluded);
+        assert_eq!(status_from_gamma(0.79), TrackStatus::PartiallyOccluded);
+        assert_eq!(status_from_gamma(0.8), TrackStatus::Lost);
+    }
+
+    #[test]
+    fn track_status_prefers_alpha_then_gamma() {
+        let (w, h) = (48, 40);
+        let pixels: Vec<f32> = (0..w * h).map(|i| ((i * 37) % 200) as f32).collect();
+        let mut tracker = build(Preset::M1.config(20, 1)).unwrap();
+        let start = Ellipse::new(24.0, 20.0, 8.0, 10.0, 0.0);
+        let mut e = tracker
+            .init(Frame::new(w, h, &pixels).unwrap(), start)
+            .unwrap();
+        assert!(e.status.is_none() && e.gamma.is_none());
+        assert_eq!(e.track_status(), TrackStatus::Locked);
+        e.gamma = Some(0.9);
+        assert_eq!(e.track_status(), TrackStatus::Lost);
+        e.status = Some(StatusEstimate {
+            alpha_hat: TrackStatus::PartiallyOccluded,
+            alpha_probs: [0.2, 0.5, 0.3],
+            gamma_hat: 0.9,
+        });
+        assert_eq!(e.track_status(), TrackStatus::PartiallyOccluded);
+    }
 }

@@ -39,7 +39,7 @@ pub trait ToGreyBuffer {
 
 /// ITU-R BT.601 luma of 8-bit RGB, in grey levels (the formula of the Y4M luma plane).
 fn bt601_u8(p: &[u8]) -> f32 {
-    0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2])
+    crate::luma_bt601(p[0], p[1], p[2])
 }
 
 /// BT.601 luma of RGB already in grey levels 0–255.

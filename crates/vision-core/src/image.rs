@@ -10,6 +10,15 @@ use crate::{Error, Result};
 /// An owned grey frame: the image crate's f32 luma buffer, grey levels 0–255, row-major.
 pub type GreyBuffer = ImageBuffer<Luma<f32>, Vec<f32>>;
 
+/// The grey level of an 8-bit RGB pixel, with the ITU-R BT.601 luma weights
+/// (0.299 R + 0.587 G + 0.114 B, in f32, in this order): the one conversion from colour to the
+/// workspace's grey frames, so that every reader of colour frames (image folders, the Python
+/// binding) gives the trackers the same grey levels.
+#[inline]
+pub fn luma_bt601(r: u8, g: u8, b: u8) -> f32 {
+    0.299 * f32::from(r) + 0.587 * f32::from(g) + 0.114 * f32::from(b)
+}
+
 /// A borrowed, row-major grey image in f32 grey levels (0–255), checked once at construction:
 /// both sides at least one pixel, `width · height` values, every value finite.
 ///

@@ -31,9 +31,9 @@ use crate::{AppError, Result};
 /// The tracker `track run` uses when neither `--tracker` nor `--config` names one.
 pub const DEFAULT_TRACKER: &str = "head";
 /// Default number of particles.
-pub const DEFAULT_PARTICLES: usize = 200;
+pub const DEFAULT_PARTICLES: usize = trackers::DEFAULT_PARTICLES;
 /// Default seed.
-pub const DEFAULT_SEED: u64 = 1;
+pub const DEFAULT_SEED: u64 = trackers::DEFAULT_SEED;
 /// Default largest number of frames put in the animated GIF (`--gif-frames`; longer runs use
 /// every k-th overlay).
 pub const GIF_MAX_FRAMES: usize = 150;
@@ -258,27 +258,8 @@ fn config_error(path: &Path, reason: impl std::fmt::Display) -> AppError {
 fn load_config(path: &Path) -> Result<TrackerConfig> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| config_error(path, format!("cannot read the configuration: {e}")))?;
-    let is_toml = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    if is_toml {
-        toml::from_str(&text).map_err(|e| {
-            // toml's own message draws the line with a caret over several lines; one line here.
-            let at = e
-                .span()
-                .map(|span| {
-                    let before = &text[..span.start.min(text.len())];
-                    let line = before.matches('\n').count() + 1;
-                    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-                    format!(" at line {line}, column {column}")
-                })
-                .unwrap_or_default();
-            config_error(path, format!("invalid TOML{at}: {}", e.message().trim()))
-        })
-    } else {
-        serde_json::from_str(&text).map_err(|e| config_error(path, format!("invalid JSON: {e}")))
-    }
+    TrackerConfig::parse(&text, trackers::ConfigFormat::of_path(path))
+        .map_err(|reason| config_error(path, reason))
 }
 
 /// Largest difference, in radians, between an `--init-ellipse` angle and a multiple of π/2 that

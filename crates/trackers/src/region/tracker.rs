@@ -160,7 +160,11 @@ impl RegionTracker {
     /// for a grey frame or a grey image stored as RGB.
     fn bins(&self, frame: &Frame<'_>) -> ColourBins {
         let s = &self.settings;
-        if frame.rgb().is_some_and(is_chromatic) {
+        // Chromaticity reads the spread of a pixel's components, whatever their order.
+        if frame
+            .colour()
+            .is_some_and(|(pixels, _)| is_chromatic(pixels))
+        {
             ColourBins::colour(s.hs_bins, s.value_bins)
         } else {
             ColourBins::grey(2 * s.value_bins)

@@ -67,7 +67,7 @@ impl WorkingWindow {
         let inv = 1.0 / (offsets.len() * offsets.len()) as f32;
         let (w, h) = (frame.width(), frame.height());
         let grey = frame.data();
-        let rgb = frame.rgb().filter(|_| bins.is_colour());
+        let rgb = frame.colour().filter(|_| bins.is_colour());
         for j in 0..self.height {
             for i in 0..self.width {
                 let cx = x0 + (i as f64 + 0.5) * step;
@@ -79,10 +79,10 @@ impl WorkingWindow {
                         let x = ((cx + dx * step) as usize).min(w - 1);
                         let k = y * w + x;
                         l += grey[k];
-                        if let Some(rgb) = rgb {
-                            r += f32::from(rgb[3 * k]);
-                            g += f32::from(rgb[3 * k + 1]);
-                            b += f32::from(rgb[3 * k + 2]);
+                        if let Some((pixels, [ro, go, bo])) = rgb {
+                            r += f32::from(pixels[3 * k + ro]);
+                            g += f32::from(pixels[3 * k + go]);
+                            b += f32::from(pixels[3 * k + bo]);
                         }
                     }
                 }

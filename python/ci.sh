@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The Python package's CI: a fresh virtual environment, `pip install ./python pytest numpy` (which
+# builds the Rust code in release mode through maturin), then pytest with its summary.
+#
+# The determinism tests compare the binding's boxes with `track run`'s: they use $TRACK_BIN, or
+# the newest target/*/track of the repository (built here when there is none).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+repo=$(pwd)
+python=${PYTHON:-python3}
+venv=$(mktemp -d "${TMPDIR:-/tmp}/contour-track-venv.XXXXXX")
+trap 'rm -rf "$venv"' EXIT
+if ! "$python" -m venv "$venv" 2>/dev/null; then
+    # Debian's python3 lacks venv until python3-venv is installed.
+    apt-get update && apt-get install -y --no-install-recommends python3-venv
+    "$python" -m venv "$venv"
+fi
+if [ -z "${TRACK_BIN:-}" ] && ! ls target/*/track >/dev/null 2>&1; then
+    cargo build -p track-app --locked
+fi
+export CONTOUR_TRACK_REQUIRE_TRACK_BIN=1
+start=$(date +%s)
+"$venv/bin/python" -m pip install --quiet --upgrade pip
+"$venv/bin/python" -m pip install --quiet "$repo/python" pytest numpy
+echo "python/ci.sh: pip install took $(( $(date +%s) - start )) s"
+cd "$repo/python"
+# The pytest script, not `python -m pytest`: the latter puts python/ on sys.path, where the
+# contour_track source folder (without its compiled extension) would shadow the installed package.
+"$venv/bin/pytest" -q -p no:cacheprovider tests
