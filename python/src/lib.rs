@@ -36,6 +36,7 @@ fn tracker_error(e: trackers::Error) -> PyErr {
         trackers::Error::InvalidSetting { .. }
         | trackers::Error::BadFrame { .. }
         | trackers::Error::Image(_)
+        | trackers::Error::RgbSize { .. }
         | trackers::Error::UnknownPreset { .. } => PyValueError::new_err(e.to_string()),
         other => PyRuntimeError::new_err(other.to_string()),
     }
