@@ -11,7 +11,7 @@ use crate::groundtruth::{
     BoxInFrame, check_groundtruth_len, first_box_in_frame, load_groundtruth, parse_box_arg,
     parse_ellipse_arg,
 };
-use crate::metrics::{SequenceMetrics, evaluate};
+use crate::metrics::{SequenceMetrics, score_run};
 use crate::plots::{all_figures, write_figures};
 use crate::record::{
     CsvColumns, FrameRecord, Interruption, Summary, status_counts, write_summary,
@@ -301,15 +301,20 @@ pub fn initial_ellipse_for(e: &Ellipse, config: &TrackerConfig) -> Result<Ellips
     ))
 }
 
-/// A progress bar on standard error, hidden when `quiet`.
+/// A progress bar on standard error over `len` frames, hidden when `quiet`.
 pub fn progress(len: u64, quiet: bool, what: &str) -> ProgressBar {
+    progress_of(len, quiet, what, "frames")
+}
+
+/// A progress bar on standard error over `len` things named `unit` (`frames`, `runs`), hidden
+/// when `quiet`.
+pub fn progress_of(len: u64, quiet: bool, what: &str, unit: &str) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new(len);
-    if let Ok(style) =
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {per_sec}, eta {eta}")
-    {
+    let template = format!("{{msg}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{per_sec}}, eta {{eta}}");
+    if let Ok(style) = ProgressStyle::with_template(&template) {
         bar.set_style(style.progress_chars("=> "));
     }
     bar.set_message(what.to_owned());
@@ -584,7 +589,7 @@ fn write_outputs(
     let figures =
         write_animation_and_plots(args, &records, smoothed.as_deref(), gif, &mut written)?;
     let metrics = match &input.truth {
-        Some(t) => Some(score(start, &records, t, output.seconds)?),
+        Some(t) => score(start, &records, t, output.seconds)?,
         None => None,
     };
     if args.report {
@@ -828,16 +833,19 @@ fn stream_progress(quiet: bool) -> ProgressBar {
     bar
 }
 
-/// Scores the tracked frames against the ground truth of the same frames.
+/// Scores the tracked frames against the ground truth with the one scorer of `track eval otb`
+/// ([`score_run`]): the start frame is given, not tracked, so it is not scored. `None` when no
+/// labelled frame follows it.
 fn score(
     start: usize,
     records: &[FrameRecord],
     truth: &[Option<BoundingBox>],
     seconds: f64,
-) -> Result<SequenceMetrics> {
-    let boxes: Vec<BoundingBox> = records.iter().map(|r| r.bbox).collect();
-    let t = &truth[start..start + boxes.len()];
-    evaluate(&boxes, t, Some(seconds.max(1e-9)))
+) -> Result<Option<SequenceMetrics>> {
+    let predicted: Vec<Option<BoundingBox>> = std::iter::repeat_n(None, start)
+        .chain(records.iter().map(|r| Some(r.bbox)))
+        .collect();
+    score_run(&predicted, truth, start, Some(seconds.max(1e-9)))
 }
 
 fn print_summary(s: &Summary, out: &Path) -> Result<()> {
