@@ -448,6 +448,47 @@ mod tests {
     }
 
     #[test]
+    fn score_run_skips_the_start_frame_and_counts_missing_boxes_as_misses() {
+        let gt = BoundingBox::new(0.0, 0.0, 10.0, 10.0);
+        let far = BoundingBox::new(100.0, 100.0, 10.0, 10.0);
+        let truth = [None, Some(gt), Some(gt), None, Some(gt), Some(gt)];
+        // Started on frame 1 far off (never scored); frames 2 and 4 right, frame 5 no box.
+        let pred = [None, Some(far), Some(gt), Some(far), Some(gt), None];
+        let m = score_run(&pred, &truth, 1, Some(2.5)).unwrap().unwrap();
+        assert_eq!(m.labelled_frames, 3);
+        assert_eq!(m.frames, 5, "frames 1–5 tracked");
+        assert_eq!(m.fps, Some(2.0));
+        assert_relative_eq!(m.precision_20, 2.0 / 3.0, epsilon = 1e-15);
+        assert_relative_eq!(m.success_auc, 40.0 / 63.0, epsilon = 1e-15);
+        assert_relative_eq!(m.mean_iou, 2.0 / 3.0, epsilon = 1e-15);
+        // The miss has no centre error: the mean is over frames with a box.
+        assert_eq!(m.mean_centre_error, 0.0);
+        assert_eq!(m.precision_curve.len(), PRECISION_CURVE_MAX_PX + 1);
+        assert_relative_eq!(m.precision_curve[0], 2.0 / 3.0, epsilon = 1e-15);
+        // A zero-size box is a miss too; an interrupted run is scored on what it tracked.
+        let zero = BoundingBox::new(0.0, 0.0, 0.0, 10.0);
+        let m = score_run(&[None, Some(gt), Some(zero)], &truth, 1, None)
+            .unwrap()
+            .unwrap();
+        assert_eq!((m.labelled_frames, m.success_auc), (1, 0.0));
+        // Nothing labelled after the start: no score, not an error.
+        assert_eq!(score_run(&pred[..2], &truth, 1, None).unwrap(), None);
+        assert_eq!(score_run(&pred, &truth, 5, None).unwrap(), None);
+        // Longer than the truth, or a non-finite box on a scored frame: an error.
+        assert!(score_run(&[None; 7], &truth, 1, None).is_err());
+        let nan = BoundingBox::new(f64::NAN, 0.0, 1.0, 1.0);
+        let msg = score_run(&[None, Some(gt), Some(nan)], &truth, 1, None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("frame 3") && msg.contains("not finite"),
+            "{msg}"
+        );
+        // …but one on the start frame is not looked at.
+        assert!(score_run(&[None, Some(nan), Some(gt)], &truth, 1, None).is_ok());
+    }
+
+    #[test]
     fn mean_over_sequences() {
         let gt = BoundingBox::new(0.0, 0.0, 10.0, 10.0);
         let a = evaluate(&[gt], &[Some(gt)], Some(1.0)).unwrap();
