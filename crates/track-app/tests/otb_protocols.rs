@@ -386,6 +386,23 @@ fn track_run_and_eval_otb_score_a_run_alike_and_results_round_trip_boxes_txt() {
         assert_eq!(r[6], f(&m["success_auc"]), "{r:?}");
         assert_eq!(r[7], f(&m["precision_20"]), "{r:?}");
     }
+    // With --results alone nothing is tracked: only the boxes read are scored.
+    let only = dir.path().join("only");
+    let o = track(&[
+        "eval",
+        "otb",
+        s(&seq),
+        "--results",
+        &format!("from_run={}", s(&results)),
+        "--out",
+        s(&only),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let rows = csv_rows(&only, "ope");
+    assert!(rows.iter().all(|r| r[2] == "from_run"), "{rows:?}");
+    assert_eq!(row(&rows, "walk", "from_run")[6], read[6]);
+    assert!(!only.join("ope/head").exists());
     // And eval's own box file is track run's boxes.txt, line for line.
     assert_eq!(
         std::fs::read_to_string(out.join("ope/m1/walk.txt")).unwrap(),

@@ -126,7 +126,7 @@ pub struct OtbArgs {
     /// OTB folders.
     #[arg(required = true)]
     pub sequences: Vec<PathBuf>,
-    /// Trackers (default head when no --config is given), particles and seed (both also
+    /// Trackers (default head when neither --config nor --results is given), particles and seed (both also
     /// override those of a --config file).
     #[command(flatten)]
     pub run: TrackerRuns,

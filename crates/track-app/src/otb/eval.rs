@@ -173,11 +173,17 @@ pub fn run(args: &OtbArgs) -> Result<()> {
         out,
         quiet,
     } = args;
-    let configs = run.configs(configs, &[Preset::Head], *edge_threshold)?;
+    let results = parse_results(results)?;
+    // With --results alone, only those are scored: no tracker runs unless asked for.
+    let default: &[Preset] = if results.is_empty() {
+        &[Preset::Head]
+    } else {
+        &[]
+    };
+    let configs = run.configs(configs, default, *edge_threshold)?;
     let mut protocols = protocols.clone();
     protocols.sort();
     protocols.dedup();
-    let results = parse_results(results)?;
     let mut names: Vec<&str> = Vec::new();
     for name in configs
         .iter()
