@@ -55,6 +55,14 @@ pub struct Chart {
     pub svg: String,
 }
 
+/// One curve: its legend, the figure the legend gives, its points and colour.
+struct Curve {
+    label: String,
+    score: f64,
+    points: Vec<(f64, f64)>,
+    colour: RGBColor,
+}
+
 fn plot_err(e: impl std::fmt::Display) -> AppError {
     AppError::computation("plotting", e)
 }
@@ -81,7 +89,7 @@ pub fn chart(
         Some(s) => format!("{}_{s}.svg", kind.name()),
     };
     // Curves with their legend figure, best first (OTB's order).
-    let mut curves: Vec<(String, f64, Vec<(f64, f64)>, RGBColor)> = Vec::new();
+    let mut curves: Vec<Curve> = Vec::new();
     for (i, r) in rows.iter().enumerate() {
         let m = &r.metrics;
         let (score, points): (f64, Vec<(f64, f64)>) = match kind {
@@ -108,14 +116,14 @@ pub fn chart(
                 format!("{title}: the curve of {} is not finite", r.tracker),
             ));
         }
-        curves.push((
-            format!("{} [{score:.3}]", r.tracker),
+        curves.push(Curve {
+            label: format!("{} [{score:.3}]", r.tracker),
             score,
             points,
-            PALETTE[i % PALETTE.len()],
-        ));
+            colour: PALETTE[i % PALETTE.len()],
+        });
     }
-    curves.sort_by(|a, b| b.1.total_cmp(&a.1));
+    curves.sort_by(|a, b| b.score.total_cmp(&a.score));
     let (x_desc, y_desc, x_max) = match kind {
         Kind::Success => ("Overlap threshold", "Success rate", 1.0),
         Kind::Precision => (
@@ -148,14 +156,17 @@ pub fn chart(
             .light_line_style(WHITE)
             .draw()
             .map_err(plot_err)?;
-        for (label, _, points, colour) in &curves {
-            let colour = *colour;
-            c.draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
-                .map_err(plot_err)?
-                .label(label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-                });
+        for curve in &curves {
+            let colour = curve.colour;
+            c.draw_series(LineSeries::new(
+                curve.points.iter().copied(),
+                colour.stroke_width(2),
+            ))
+            .map_err(plot_err)?
+            .label(curve.label.clone())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+            });
         }
         c.configure_series_labels()
             .background_style(WHITE.mix(0.85))
