@@ -2,8 +2,8 @@
 //!
 //! The OTB layout (docs/MODELS.md, "Evaluation protocol") has one line per frame, `x,y,w,h` of the
 //! target's axis-aligned box (top-left corner, width, height, in pixels), separated by commas, tabs
-//! or spaces. Some sequences label only every k-th frame and write `0,0,0,0` elsewhere; those frames
-//! are unlabelled ([`None`]) and left out of every metric.
+//! or spaces. Some sequences label only every k-th frame and write `0,0,0,0` (or `NaN,NaN,NaN,NaN`)
+//! elsewhere; those frames are unlabelled ([`None`]) and left out of every metric.
 
 use std::path::Path;
 
@@ -146,13 +146,18 @@ fn parse_line(text: &str, line_no: usize) -> std::result::Result<GtLine, String>
     }
     let mut v = [0.0_f64; 4];
     for (slot, field) in v.iter_mut().zip(&fields) {
-        let parsed: f64 = field
+        *slot = field
             .parse()
             .map_err(|_| format!("line {line_no}: {field:?} is not a number"))?;
+    }
+    // `NaN,NaN,NaN,NaN`: the other common mark of a frame without a label (UAV123, LaSOT).
+    if v.iter().all(|x| x.is_nan()) {
+        return Ok(GtLine::Unlabelled);
+    }
+    for (parsed, field) in v.iter().zip(&fields) {
         if !parsed.is_finite() {
             return Err(format!("line {line_no}: {field:?} is not a finite number"));
         }
-        *slot = parsed;
     }
     let [x, y, w, h] = v;
     if w < 0.0 || h < 0.0 {
@@ -174,7 +179,7 @@ fn parse_line(text: &str, line_no: usize) -> std::result::Result<GtLine, String>
 /// Trailing blank lines are ignored; a blank line before the last box is an error (line i belongs
 /// to frame i, so a gap would shift every later label).
 ///
-/// `0,0,0,0` marks an unlabelled frame. A box of zero width or height *after* the first labelled
+/// `0,0,0,0` (or a row of `NaN`) marks an unlabelled frame. A box of zero width or height *after* the first labelled
 /// box carries no target and is taken as unlabelled too, rather than breaking the evaluation of a
 /// whole sequence; *before* it, such a box stands where the tracker would start, so it is an
 /// error (taking it as unlabelled would silently start the tracker on a later frame).
@@ -300,9 +305,11 @@ mod tests {
 
     #[test]
     fn parses_all_separators_and_unlabelled_frames() {
-        let text = "128,46,104,127\n0,0,0,0\n1\t2\t3\t4\n5 6  7 8\n9, 10, 11, 12\n\n\n";
+        let text =
+            "128,46,104,127\n0,0,0,0\n1\t2\t3\t4\n5 6  7 8\n9, 10, 11, 12\nNaN,NaN,NaN,NaN\n\n\n";
         let gt = parse_groundtruth(text, p()).unwrap();
-        assert_eq!(gt.len(), 5);
+        assert_eq!(gt.len(), 6);
+        assert_eq!(gt[5], None, "a row of NaN is unlabelled");
         assert_eq!(gt[0], Some(BoundingBox::new(128.0, 46.0, 104.0, 127.0)));
         assert_eq!(gt[1], None);
         assert_eq!(gt[2], Some(BoundingBox::new(1.0, 2.0, 3.0, 4.0)));

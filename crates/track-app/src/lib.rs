@@ -14,6 +14,7 @@ pub mod error;
 pub mod evaluation;
 pub mod groundtruth;
 pub mod metrics;
+pub mod otb;
 pub mod output;
 pub mod plots;
 pub mod record;

@@ -41,6 +41,17 @@ pub fn success_curve(ious: &[f64]) -> [f64; SUCCESS_STEPS] {
     success_thresholds().map(|t| ious.iter().filter(|&&v| v > t).count() as f64 / n)
 }
 
+/// The largest centre-error threshold of the precision plot, pixels (OTB's: 50).
+pub const PRECISION_CURVE_MAX_PX: usize = 50;
+
+/// The precision curve: for each threshold 0, 1, …, [`PRECISION_CURVE_MAX_PX`] px, the share of
+/// `errors` at most that far (see [`precision_at`]).
+pub fn precision_curve(errors: &[f64]) -> Vec<f64> {
+    (0..=PRECISION_CURVE_MAX_PX)
+        .map(|t| precision_at(errors, t as f64))
+        .collect()
+}
+
 /// Area under the success curve: the mean of its values.
 pub fn success_auc(ious: &[f64]) -> f64 {
     success_curve(ious).iter().sum::<f64>() / SUCCESS_STEPS as f64
@@ -81,6 +92,10 @@ pub struct SequenceMetrics {
     pub success_auc: f64,
     /// The success curve itself (thresholds 0, 0.05, …, 1).
     pub success_curve: Vec<f64>,
+    /// The precision curve (centre-error thresholds 0, 1, …, [`PRECISION_CURVE_MAX_PX`] px), for
+    /// OTB's precision plot.
+    #[serde(skip)]
+    pub precision_curve: Vec<f64>,
     /// Mean IoU over labelled frames.
     pub mean_iou: f64,
     /// Mean centre error over labelled frames, pixels.
@@ -155,7 +170,9 @@ pub fn with_self_evaluation(
 }
 
 /// Scores `estimates` (one box per frame) against `truth` (one entry per frame, `None` for
-/// unlabelled frames). `seconds` is the tracking time, for frames/s.
+/// unlabelled frames), every labelled frame included. `seconds` is the tracking time, for
+/// frames/s. A tracked run, whose first frame is given rather than tracked, is scored by
+/// [`score_run`] instead.
 ///
 /// # Errors
 /// [`AppError::Computation`] when the lengths differ, nothing is labelled, an estimate on a
@@ -165,10 +182,9 @@ pub fn evaluate(
     truth: &[Option<BoundingBox>],
     seconds: Option<f64>,
 ) -> Result<SequenceMetrics> {
-    let ctx = "evaluation";
     if estimates.len() != truth.len() {
         return Err(AppError::computation(
-            ctx,
+            "evaluation",
             format!(
                 "{} estimated boxes for {} ground-truth frames",
                 estimates.len(),
@@ -176,40 +192,101 @@ pub fn evaluate(
             ),
         ));
     }
+    let predicted: Vec<Option<BoundingBox>> = estimates.iter().copied().map(Some).collect();
+    score_frames(&predicted, truth, 0, seconds)?
+        .ok_or_else(|| AppError::computation("evaluation", "no labelled frame to score"))
+}
+
+/// Scores one run of a tracker: the one scorer of `track run`, `track demo` and `track eval otb`
+/// (and the OTB toolkit's, and `opencv_peers.py`'s).
+///
+/// The tracker was started on frame `start` from a given box, so that frame is not scored, nor
+/// any before it: only the labelled frames after `start` count. `predicted[i]` is the box on
+/// frame `i` of the sequence (entries up to `start` are ignored; `predicted` may stop early, for
+/// an interrupted run); `None`, or a box of zero width or height, is a frame the tracker gave no
+/// box for, scored as a miss (IoU 0, centre error infinite: outside every precision threshold,
+/// and left out of the mean centre error). `seconds` is the tracking time of the
+/// `predicted.len() - start` frames from `start` on, for frames/s.
+///
+/// Returns `None` when no labelled frame follows `start` within `predicted`.
+///
+/// # Errors
+/// [`AppError::Computation`] when `predicted` is longer than `truth`, a box on a scored frame is
+/// not finite (named by frame), or `seconds` is not positive.
+pub fn score_run(
+    predicted: &[Option<BoundingBox>],
+    truth: &[Option<BoundingBox>],
+    start: usize,
+    seconds: Option<f64>,
+) -> Result<Option<SequenceMetrics>> {
+    if predicted.len() > truth.len() {
+        return Err(AppError::computation(
+            "evaluation",
+            format!(
+                "{} estimated boxes for {} ground-truth frames",
+                predicted.len(),
+                truth.len()
+            ),
+        ));
+    }
+    score_frames(predicted, truth, start + 1, seconds)
+}
+
+/// Scores the labelled frames from `first_scored` on (see [`score_run`]); `None` without any.
+fn score_frames(
+    predicted: &[Option<BoundingBox>],
+    truth: &[Option<BoundingBox>],
+    first_scored: usize,
+    seconds: Option<f64>,
+) -> Result<Option<SequenceMetrics>> {
+    let ctx = "evaluation";
     let mut ious = Vec::new();
     let mut errors = Vec::new();
     let mut frames_of = Vec::new();
-    for (i, (est, gt)) in estimates.iter().zip(truth).enumerate() {
+    for (i, (est, gt)) in predicted.iter().zip(truth).enumerate().skip(first_scored) {
         let Some(gt) = gt else { continue };
-        if !est.is_finite() {
-            return Err(AppError::computation(
-                ctx,
-                format!("the estimated box of frame {} is not finite", i + 1),
-            ));
+        match est {
+            Some(b) if !b.is_finite() => {
+                return Err(AppError::computation(
+                    ctx,
+                    format!("the estimated box of frame {} is not finite", i + 1),
+                ));
+            }
+            Some(b) if b.w > 0.0 && b.h > 0.0 => {
+                ious.push(b.iou(gt));
+                errors.push(b.centre_distance(gt));
+            }
+            _ => {
+                ious.push(0.0);
+                errors.push(f64::INFINITY);
+            }
         }
-        ious.push(est.iou(gt));
-        errors.push(est.centre_distance(gt));
         frames_of.push(i);
     }
     if ious.is_empty() {
-        return Err(AppError::computation(ctx, "no labelled frame to score"));
+        return Ok(None);
     }
     let n = ious.len() as f64;
-    Ok(SequenceMetrics {
-        frames: estimates.len(),
+    let boxed: Vec<f64> = errors.iter().copied().filter(|e| e.is_finite()).collect();
+    let tracked = predicted.len() - first_scored.saturating_sub(1).min(predicted.len());
+    Ok(Some(SequenceMetrics {
+        frames: tracked,
         labelled_frames: ious.len(),
         precision_20: precision_at(&errors, PRECISION_THRESHOLD_PX),
         success_auc: success_auc(&ious),
         success_curve: success_curve(&ious).to_vec(),
+        precision_curve: precision_curve(&errors),
         mean_iou: ious.iter().sum::<f64>() / n,
-        mean_centre_error: errors.iter().sum::<f64>() / n,
+        mean_centre_error: if boxed.is_empty() {
+            f64::INFINITY
+        } else {
+            boxed.iter().sum::<f64>() / boxed.len() as f64
+        },
         failed_at_frame: first_failure(&ious).map(|k| frames_of[k]),
-        fps: seconds
-            .map(|s| frames_per_second(estimates.len(), s))
-            .transpose()?,
+        fps: seconds.map(|s| frames_per_second(tracked, s)).transpose()?,
         lost_auc: None,
         lost_scores: Vec::new(),
-    })
+    }))
 }
 
 /// The mean of each score over several sequences (the last row of `track eval otb`): precision,
@@ -235,6 +312,9 @@ pub fn mean_metrics(all: &[SequenceMetrics]) -> Option<SequenceMetrics> {
         success_auc: mean(&|m| m.success_auc),
         success_curve: (0..SUCCESS_STEPS)
             .map(|i| mean(&|m| m.success_curve.get(i).copied().unwrap_or(0.0)))
+            .collect(),
+        precision_curve: (0..=PRECISION_CURVE_MAX_PX)
+            .map(|i| mean(&|m| m.precision_curve.get(i).copied().unwrap_or(0.0)))
             .collect(),
         mean_iou: mean(&|m| m.mean_iou),
         mean_centre_error: mean(&|m| m.mean_centre_error),
@@ -365,6 +445,47 @@ mod tests {
         );
         assert!(evaluate(&[gt], &[Some(gt)], Some(0.0)).is_err());
         assert!(frames_per_second(3, f64::NAN).is_err());
+    }
+
+    #[test]
+    fn score_run_skips_the_start_frame_and_counts_missing_boxes_as_misses() {
+        let gt = BoundingBox::new(0.0, 0.0, 10.0, 10.0);
+        let far = BoundingBox::new(100.0, 100.0, 10.0, 10.0);
+        let truth = [None, Some(gt), Some(gt), None, Some(gt), Some(gt)];
+        // Started on frame 1 far off (never scored); frames 2 and 4 right, frame 5 no box.
+        let pred = [None, Some(far), Some(gt), Some(far), Some(gt), None];
+        let m = score_run(&pred, &truth, 1, Some(2.5)).unwrap().unwrap();
+        assert_eq!(m.labelled_frames, 3);
+        assert_eq!(m.frames, 5, "frames 1–5 tracked");
+        assert_eq!(m.fps, Some(2.0));
+        assert_relative_eq!(m.precision_20, 2.0 / 3.0, epsilon = 1e-15);
+        assert_relative_eq!(m.success_auc, 40.0 / 63.0, epsilon = 1e-15);
+        assert_relative_eq!(m.mean_iou, 2.0 / 3.0, epsilon = 1e-15);
+        // The miss has no centre error: the mean is over frames with a box.
+        assert_eq!(m.mean_centre_error, 0.0);
+        assert_eq!(m.precision_curve.len(), PRECISION_CURVE_MAX_PX + 1);
+        assert_relative_eq!(m.precision_curve[0], 2.0 / 3.0, epsilon = 1e-15);
+        // A zero-size box is a miss too; an interrupted run is scored on what it tracked.
+        let zero = BoundingBox::new(0.0, 0.0, 0.0, 10.0);
+        let m = score_run(&[None, Some(gt), Some(zero)], &truth, 1, None)
+            .unwrap()
+            .unwrap();
+        assert_eq!((m.labelled_frames, m.success_auc), (1, 0.0));
+        // Nothing labelled after the start: no score, not an error.
+        assert_eq!(score_run(&pred[..2], &truth, 1, None).unwrap(), None);
+        assert_eq!(score_run(&pred, &truth, 5, None).unwrap(), None);
+        // Longer than the truth, or a non-finite box on a scored frame: an error.
+        assert!(score_run(&[None; 7], &truth, 1, None).is_err());
+        let nan = BoundingBox::new(f64::NAN, 0.0, 1.0, 1.0);
+        let msg = score_run(&[None, Some(gt), Some(nan)], &truth, 1, None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("frame 3") && msg.contains("not finite"),
+            "{msg}"
+        );
+        // …but one on the start frame is not looked at.
+        assert!(score_run(&[None, Some(nan), Some(gt)], &truth, 1, None).is_ok());
     }
 
     #[test]

@@ -202,7 +202,7 @@ pub fn ess_note(region: bool) -> String {
     }
 }
 
-const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1500px;margin:2em auto;\
+pub(crate) const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1500px;margin:2em auto;\
 padding:0 1em;color:#222}table{border-collapse:collapse}td,th{border:1px solid #ccc;\
 padding:4px 10px;text-align:left}td.v{text-align:right;font-variant-numeric:tabular-nums}\
 .strip{display:flex;flex-wrap:wrap;gap:8px}figure{margin:0}figcaption{font-size:.85em;\

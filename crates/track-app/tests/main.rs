@@ -6,6 +6,7 @@ mod golden;
 mod learn_switching;
 mod messages;
 mod motion_failures;
+mod otb_protocols;
 mod outputs;
 mod reliability;
 mod silent_results;

@@ -9,7 +9,7 @@ use vision_core::BoundingBox;
 use crate::commands::eval::ScenarioArg;
 use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, STRIP_FRAMES};
 use crate::evaluation::SyntheticSequence;
-use crate::metrics::evaluate;
+use crate::metrics::score_run;
 use crate::output::write_atomic;
 use crate::plots::{PlotOptions, TruthAt, all_figures_with, write_figures};
 use crate::record::{
@@ -84,8 +84,13 @@ pub fn run(args: &Args) -> Result<()> {
             written.push(rel.display().to_string());
         }
     }
-    let boxes: Vec<BoundingBox> = records.iter().map(|r| r.bbox).collect();
-    let metrics = evaluate(&boxes, &truth_boxes, Some(output.seconds.max(1e-9)))?;
+    // The one scorer of `track run` and `track eval otb`: frame 1 (the initialisation) is not
+    // scored.
+    let predicted: Vec<Option<BoundingBox>> = records.iter().map(|r| Some(r.bbox)).collect();
+    let metrics = score_run(&predicted, &truth_boxes, 0, Some(output.seconds.max(1e-9)))?
+        .ok_or_else(|| {
+            AppError::computation("evaluation", "no labelled frame after the first to score")
+        })?;
     written.extend(
         [
             "track.gif",

@@ -13,7 +13,7 @@ use crate::evaluation::{
     switching_scores, table1, table1_csv, table1_markdown,
 };
 use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
-use crate::metrics::{SequenceMetrics, evaluate, mean_metrics, with_self_evaluation};
+use crate::otb::Protocol;
 use crate::output::write_atomic;
 use crate::sequence::{FrameSource, open_sequence};
 use crate::session::Session;
@@ -38,13 +38,31 @@ pub enum Evaluation {
     /// occlusion scenes.
     #[command(after_help = "Example:\n  track eval switching --out results/")]
     Switching(SwitchingArgs),
-    /// Precision at 20 px, success AUC and frames/s on OTB folders (img/ + groundtruth_rect.txt;
-    /// frames labelled 0,0,0,0 are not scored).
-    #[command(
-        after_help = "Example:\n  track eval otb ../shared/data/real/girl_mil --tracker m1 --tracker full"
-    )]
+    /// Success AUC, precision at 20 px and frames/s on OTB folders (img/ + groundtruth_rect.txt;
+    /// frames labelled 0,0,0,0 or NaN are not scored, nor is each run's start frame), under the
+    /// OTB benchmark's protocols OPE, TRE and SRE, beside other trackers' boxes.
+    #[command(after_help = OTB_HELP)]
     Otb(OtbArgs),
 }
+
+const OTB_HELP: &str = "\
+Protocols (as ../shared/tools/opencv_peers.py runs them; one run starts from a box on a labelled
+frame, tracks to the end and is scored on the labelled frames after its start frame):
+  ope  one run from the first labelled frame and its true box;
+  tre  10 runs, run i starting at the first labelled frame at or after floor(i*n/10)
+       (n = frames; duplicate starts and starts with no labelled frame after them dropped);
+  sre  12 runs from the first labelled frame: the box shifted by 10 % of its width and/or
+       height (left, right, up, down, the four diagonals), then scaled about its centre by
+       0.8, 0.9, 1.1 and 1.2.
+A sequence's figure is the mean over its runs; the set's the mean over sequences.
+
+Outputs in --out, per protocol P: P/otb.md, P/otb.csv, P/plots/success.svg and precision.svg
+(every tracker over the set) and success_SEQ.svg, precision_SEQ.svg (each sequence), and each
+run's boxes as P/TRACKER/SEQ[.RUN].txt (readable again with --results); index.html shows it all.
+
+Examples:
+  track eval otb ../shared/data/real/girl_mil --tracker m1 --tracker full
+  track eval otb ../shared/data/real/* --protocol tre --protocol sre --results csrt=peers/";
 
 /// Arguments of `track eval table1`.
 #[derive(Debug, clap::Args)]
@@ -108,7 +126,7 @@ pub struct OtbArgs {
     /// OTB folders.
     #[arg(required = true)]
     pub sequences: Vec<PathBuf>,
-    /// Trackers (default head when no --config is given), particles and seed (both also
+    /// Trackers (default head when neither --config nor --results is given), particles and seed (both also
     /// override those of a --config file).
     #[command(flatten)]
     pub run: TrackerRuns,
@@ -120,7 +138,14 @@ pub struct OtbArgs {
     /// beside the presets (repeatable).
     #[arg(long = "config")]
     pub configs: Vec<PathBuf>,
-    /// Folder for otb.md and otb.csv.
+    /// Protocol (repeatable): ope, tre or sre.
+    #[arg(long = "protocol", value_enum, default_values_t = [Protocol::Ope])]
+    pub protocols: Vec<Protocol>,
+    /// Another tracker's boxes, NAME=DIR (repeatable): DIR/<protocol>/NAME/<sequence>[.<run>].txt
+    /// for every run, as `opencv_peers.py --out DIR` writes them (or this command's own --out).
+    #[arg(long = "results", value_name = "NAME=DIR")]
+    pub results: Vec<String>,
+    /// Folder for the tables, plots, boxes and index.html (see below).
     #[arg(long, default_value = "track-eval")]
     pub out: PathBuf,
     /// No progress bar.
@@ -146,7 +171,7 @@ impl TrackerRuns {
     /// The configurations to run: the `--tracker` presets (`default` when neither a preset nor a
     /// `--config` file is given) and then the `--config` files, each with these particles and
     /// seed and the edge threshold, when given.
-    fn configs(
+    pub(crate) fn configs(
         &self,
         files: &[PathBuf],
         default: &[Preset],
@@ -320,41 +345,13 @@ fn run_switching(args: &SwitchingArgs) -> Result<()> {
     Ok(())
 }
 
-/// `track eval otb`: writes otb.md and otb.csv and prints the table.
+/// `track eval otb`: see [`crate::otb::eval`].
 fn run_otb(args: &OtbArgs) -> Result<()> {
-    let OtbArgs {
-        sequences,
-        run,
-        edge_threshold,
-        configs,
-        out,
-        quiet,
-    } = args;
-    let runs = run.configs(configs, &[Preset::Head], *edge_threshold)?;
-    // Results are written after every sequence is tracked: an output folder that cannot be
-    // made, or is in use, is found before that.
-    let inputs: Vec<&Path> = sequences.iter().map(PathBuf::as_path).collect();
-    let _folder = crate::output::OutputFolder::open(out, &inputs)?;
-    let mut rows: Vec<(String, String, SequenceMetrics)> = Vec::new();
-    for config in &runs {
-        let mut per_tracker = Vec::new();
-        for dir in sequences {
-            let m = evaluate_otb(dir, config, *quiet)?;
-            rows.push((sequence_name(dir), config.name.clone(), m.clone()));
-            per_tracker.push(m);
-        }
-        if let Some(mean) = mean_metrics(&per_tracker) {
-            rows.push(("mean".to_owned(), config.name.clone(), mean));
-        }
-    }
-    let md = otb_markdown(&rows);
-    write_atomic(&out.join("otb.md"), md.as_bytes())?;
-    write_atomic(&out.join("otb.csv"), otb_csv(&rows).as_bytes())?;
-    crate::output::println_stdout(&md)?;
-    Ok(())
+    crate::otb::eval::run(args)
 }
 
-fn sequence_name(dir: &Path) -> String {
+/// The name of the sequence in folder `dir`: the folder's name.
+pub(crate) fn sequence_name(dir: &Path) -> String {
     dir.file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| dir.display().to_string())
@@ -398,71 +395,4 @@ pub(crate) fn track_otb(
     }
     bar.finish_and_clear();
     Ok((session, start, truth))
-}
-
-/// Tracks one OTB folder from its first labelled box and scores it.
-fn evaluate_otb(dir: &Path, config: &TrackerConfig, quiet: bool) -> Result<SequenceMetrics> {
-    let (session, start, truth) = track_otb(dir, config, quiet)?;
-    let output = session.finish();
-    let boxes: Vec<_> = output.records.iter().map(|r| r.bbox).collect();
-    // The initialisation frame is given, not tracked: it is not scored (as in PEERS.md).
-    let mut scored = truth[start..start + boxes.len()].to_vec();
-    if let Some(first) = scored.first_mut() {
-        *first = None;
-    }
-    let p_lost: Vec<Option<f64>> = output
-        .records
-        .iter()
-        .map(|r| r.alpha_probs.get(LOST_INDEX).copied())
-        .collect();
-    let metrics = evaluate(&boxes, &scored, Some(output.seconds.max(1e-9)))?;
-    Ok(with_self_evaluation(metrics, &boxes, &scored, &p_lost))
-}
-
-/// Where P(lost) sits in a record's `alpha_probs` (locked, partially occluded, lost).
-const LOST_INDEX: usize = 2;
-
-fn otb_markdown(rows: &[(String, String, SequenceMetrics)]) -> String {
-    let mut s = String::from(
-        "| Sequence | Tracker | Precision@20px | Success AUC | Mean IoU | Frames/s | Lost ROC AUC | Failed at |\n\
-         |---|---|---|---|---|---|---|---|\n",
-    );
-    for (seq, tracker, m) in rows {
-        s.push_str(&format!(
-            "| {seq} | {tracker} | {:.3} | {:.3} | {:.3} | {:.1} | {} | {} |\n",
-            m.precision_20,
-            m.success_auc,
-            m.mean_iou,
-            m.fps.unwrap_or(0.0),
-            m.lost_auc
-                .map(|a| format!("{a:.3}"))
-                .unwrap_or_else(|| "—".into()),
-            m.failed_at_frame
-                .map(|f| (f + 1).to_string())
-                .unwrap_or_else(|| "—".into())
-        ));
-    }
-    s
-}
-
-fn otb_csv(rows: &[(String, String, SequenceMetrics)]) -> String {
-    let mut s = String::from(
-        "sequence,tracker,frames,labelled,precision_20,success_auc,mean_iou,fps,lost_auc,failed_at\n",
-    );
-    for (seq, tracker, m) in rows {
-        s.push_str(&format!(
-            "{seq},{tracker},{},{},{:.4},{:.4},{:.4},{:.2},{},{}\n",
-            m.frames,
-            m.labelled_frames,
-            m.precision_20,
-            m.success_auc,
-            m.mean_iou,
-            m.fps.unwrap_or(0.0),
-            m.lost_auc.map(|a| format!("{a:.4}")).unwrap_or_default(),
-            m.failed_at_frame
-                .map(|f| (f + 1).to_string())
-                .unwrap_or_default()
-        ));
-    }
-    s
 }

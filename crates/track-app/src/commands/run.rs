@@ -11,7 +11,7 @@ use crate::groundtruth::{
     BoxInFrame, check_groundtruth_len, first_box_in_frame, load_groundtruth, parse_box_arg,
     parse_ellipse_arg,
 };
-use crate::metrics::{SequenceMetrics, evaluate};
+use crate::metrics::{SequenceMetrics, score_run};
 use crate::plots::{all_figures_with, write_figures};
 use crate::record::{
     CsvColumns, FrameRecord, GifSummary, Interruption, Summary, status_counts, write_summary,
@@ -285,35 +285,44 @@ pub fn initial_ellipse_for(e: &Ellipse, config: &TrackerConfig) -> Result<Ellips
 /// A progress bar on standard error, hidden when `quiet`: `len` frames, with the rate and the
 /// time left.
 pub fn progress(len: u64, quiet: bool, what: &str) -> ProgressBar {
+    progress_of(len, quiet, what, "frames")
+}
+
+/// A progress bar on standard error over `len` things named `unit` (`frames`, `runs`), hidden
+/// when `quiet`.
+pub fn progress_of(len: u64, quiet: bool, what: &str, unit: &str) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }
-    progress_to(len, what, ProgressDrawTarget::stderr())
+    progress_to(len, what, unit, ProgressDrawTarget::stderr())
 }
 
-/// [`progress`] drawn on `target`.
-pub fn progress_to(len: u64, what: &str, target: ProgressDrawTarget) -> ProgressBar {
+/// [`progress_of`] drawn on `target`.
+pub fn progress_to(len: u64, what: &str, unit: &str, target: ProgressDrawTarget) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(Some(len), target);
-    if let Ok(style) =
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {rate}, eta {eta}")
-    {
-        bar.set_style(style.with_key("rate", rate_key).progress_chars("=> "));
+    let template = format!("{{msg}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{rate}}, eta {{eta}}");
+    if let Ok(style) = ProgressStyle::with_template(&template) {
+        let unit = unit.to_owned();
+        let rate = move |state: &ProgressState, w: &mut dyn std::fmt::Write| {
+            let _ = w.write_str(&rate_in(state.per_sec(), &unit));
+        };
+        bar.set_style(style.with_key("rate", rate).progress_chars("=> "));
     }
     bar.set_message(what.to_owned());
     bar
 }
 
-/// The `{rate}` of a progress bar: frames per second with one decimal.
-fn rate_key(state: &ProgressState, w: &mut dyn std::fmt::Write) {
-    let _ = w.write_str(&rate_text(state.per_sec()));
-}
-
 /// A rate in frames per second with one decimal (`–` before there is one).
 pub fn rate_text(per_sec: f64) -> String {
+    rate_in(per_sec, "frames")
+}
+
+/// A rate in `unit` per second with one decimal (`–` before there is one).
+pub fn rate_in(per_sec: f64, unit: &str) -> String {
     if per_sec.is_finite() && per_sec >= 0.0 {
-        format!("{per_sec:.1} frames/s")
+        format!("{per_sec:.1} {unit}/s")
     } else {
-        "– frames/s".to_owned()
+        format!("– {unit}/s")
     }
 }
 
@@ -641,7 +650,7 @@ fn write_outputs(
         );
     }
     let metrics = match &input.truth {
-        Some(t) => Some(score(start, &records, t, output.seconds)?),
+        Some(t) => score(start, &records, t, output.seconds)?,
         None => None,
     };
     if args.report {
@@ -980,16 +989,24 @@ fn stream_progress(quiet: bool) -> ProgressBar {
     bar
 }
 
-/// Scores the tracked frames against the ground truth of the same frames.
+/// The `{rate}` of a progress bar over frames: frames per second with one decimal.
+fn rate_key(state: &ProgressState, w: &mut dyn std::fmt::Write) {
+    let _ = w.write_str(&rate_text(state.per_sec()));
+}
+
+/// Scores the tracked frames against the ground truth with the one scorer of `track eval otb`
+/// ([`score_run`]): the start frame is given, not tracked, so it is not scored. `None` when no
+/// labelled frame follows it.
 fn score(
     start: usize,
     records: &[FrameRecord],
     truth: &[Option<BoundingBox>],
     seconds: f64,
-) -> Result<SequenceMetrics> {
-    let boxes: Vec<BoundingBox> = records.iter().map(|r| r.bbox).collect();
-    let t = &truth[start..start + boxes.len()];
-    evaluate(&boxes, t, Some(seconds.max(1e-9)))
+) -> Result<Option<SequenceMetrics>> {
+    let predicted: Vec<Option<BoundingBox>> = std::iter::repeat_n(None, start)
+        .chain(records.iter().map(|r| Some(r.bbox)))
+        .collect();
+    score_run(&predicted, truth, start, Some(seconds.max(1e-9)))
 }
 
 fn print_summary(s: &Summary, out: &Path) -> Result<()> {
@@ -1076,6 +1093,7 @@ mod tests {
         let bar = progress_to(
             40,
             "m1 on clip",
+            "frames",
             ProgressDrawTarget::term_like(Box::new(screen.clone())),
         );
         for _ in 0..12 {

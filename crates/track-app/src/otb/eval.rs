@@ -1,0 +1,354 @@
+//! `track eval otb`: every run of every protocol, tracker and sequence, spread over the cores
+//! with rayon, then the tables, plots, boxes and index page of each protocol.
+//!
+//! Every run is independent (its own tracker, seeded with the same seed), and the results are
+//! gathered in a fixed order, so they do not depend on the number of threads.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use trackers::{Preset, TrackerConfig};
+use vision_core::BoundingBox;
+
+use super::{
+    Protocol, RunStart, SequenceScore, boxes_path, boxes_text, csv, markdown, mean_over_runs,
+    read_boxes, run_starts, set_means,
+};
+use crate::commands::eval::{OtbArgs, sequence_name};
+use crate::commands::run::progress_of;
+use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
+use crate::metrics::{SequenceMetrics, score_run, with_self_evaluation};
+use crate::output::{OutputFolder, write_atomic};
+use crate::sequence::{Frame, FrameSource, open_sequence, read_all};
+use crate::session::Session;
+use crate::{AppError, Result};
+
+/// Where P(lost) sits in a record's `alpha_probs` (locked, partially occluded, lost).
+const LOST_INDEX: usize = 2;
+
+/// A sequence checked before any tracking.
+struct Prepared {
+    dir: PathBuf,
+    name: String,
+    truth: Vec<Option<BoundingBox>>,
+    /// The runs of each protocol asked for, in the order of `protocols`.
+    starts: Vec<Vec<RunStart>>,
+}
+
+/// One run's outcome.
+struct RunOutcome {
+    /// The box on every frame of the sequence (`None` before the start).
+    boxes: Vec<Option<BoundingBox>>,
+    metrics: SequenceMetrics,
+    seconds: Option<f64>,
+}
+
+/// A name used as a folder of box files: letters, digits, `-`, `_`, `.` and `+`, not `.`, `..`
+/// or `plots`.
+fn check_name(name: &str, what: &str) -> Result<()> {
+    let ok = !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_alphanumeric() || matches!(c, '-' | '_' | '.' | '+'))
+        && name != "."
+        && name != ".."
+        && name != "plots";
+    if ok {
+        Ok(())
+    } else {
+        Err(AppError::setting(
+            what,
+            format!(
+                "{name:?} cannot name a folder of box files: use letters, digits, -, _, . or + \
+                 (and not `plots`)"
+            ),
+        ))
+    }
+}
+
+/// Parses the `--results NAME=DIR` values.
+fn parse_results(values: &[String]) -> Result<Vec<(String, PathBuf)>> {
+    values
+        .iter()
+        .map(|v| {
+            let (name, dir) = v.split_once('=').ok_or_else(|| {
+                AppError::setting("--results", format!("{v:?} should be NAME=DIR"))
+            })?;
+            check_name(name, "--results")?;
+            if dir.is_empty() {
+                return Err(AppError::setting("--results", format!("{v:?} has no DIR")));
+            }
+            Ok((name.to_owned(), PathBuf::from(dir)))
+        })
+        .collect()
+}
+
+/// Reads a sequence's ground truth and frame count, checks its first box against the frame, and
+/// lays out the runs of each protocol.
+fn prepare(dir: &Path, protocols: &[Protocol]) -> Result<Prepared> {
+    let sequence = open_sequence(&dir.to_string_lossy())?;
+    let gt_path = sequence.groundtruth.clone().ok_or_else(|| {
+        AppError::input(dir, "not an OTB folder: groundtruth_rect.txt is missing")
+    })?;
+    let info = sequence.source.validate_all()?;
+    let truth = load_groundtruth(&gt_path)?;
+    check_groundtruth_len(&truth, info.frames, &gt_path)?;
+    first_box_in_frame(&truth, &gt_path, &sequence.name, info.width, info.height)?;
+    let starts: Vec<Vec<RunStart>> = protocols.iter().map(|&p| run_starts(&truth, p)).collect();
+    for (p, runs) in protocols.iter().zip(&starts) {
+        let scorable = runs
+            .iter()
+            .any(|r| truth[r.frame + 1..].iter().any(Option::is_some));
+        if !scorable {
+            return Err(AppError::input(
+                &gt_path,
+                format!(
+                    "no labelled frame after the start frame of any {} run of sequence {}: \
+                     nothing to score (the start frame is given, not tracked)",
+                    p.title(),
+                    sequence.name
+                ),
+            ));
+        }
+    }
+    Ok(Prepared {
+        dir: dir.to_path_buf(),
+        name: sequence_name(dir),
+        truth,
+        starts,
+    })
+}
+
+/// Tracks one run: `config` started at `start` on `frames` (the whole sequence).
+fn track_run(
+    frames: &[Frame],
+    truth: &[Option<BoundingBox>],
+    config: &TrackerConfig,
+    start: &RunStart,
+) -> Result<Option<RunOutcome>> {
+    let tracker = trackers::build(config.clone())
+        .map_err(|e| AppError::setting("--tracker", e.to_string()))?;
+    let mut session = Session::new(tracker, None);
+    let init = start.init.inscribed_ellipse();
+    for frame in &frames[start.frame..] {
+        session.push(frame, &init, None)?;
+    }
+    let output = session.finish();
+    let boxes: Vec<Option<BoundingBox>> = std::iter::repeat_n(None, start.frame)
+        .chain(output.records.iter().map(|r| Some(r.bbox)))
+        .collect();
+    let seconds = output.seconds.max(1e-9);
+    let Some(metrics) = score_run(&boxes, truth, start.frame, Some(seconds))? else {
+        return Ok(None);
+    };
+    // The self-evaluation over the scored frames (those after the start).
+    let tracked: Vec<BoundingBox> = output.records.iter().skip(1).map(|r| r.bbox).collect();
+    let p_lost: Vec<Option<f64>> = output
+        .records
+        .iter()
+        .skip(1)
+        .map(|r| r.alpha_probs.get(LOST_INDEX).copied())
+        .collect();
+    let metrics = with_self_evaluation(metrics, &tracked, &truth[start.frame + 1..], &p_lost);
+    Ok(Some(RunOutcome {
+        boxes,
+        metrics,
+        seconds: Some(seconds),
+    }))
+}
+
+/// Runs `track eval otb`.
+///
+/// # Errors
+/// See [`AppError`]: bad settings (exit 2), a bad sequence, ground truth or `--results` file
+/// (exit 3, naming it), an output that cannot be written (exit 4).
+pub fn run(args: &OtbArgs) -> Result<()> {
+    let OtbArgs {
+        sequences,
+        run,
+        edge_threshold,
+        configs,
+        protocols,
+        results,
+        out,
+        quiet,
+    } = args;
+    let results = parse_results(results)?;
+    // With --results alone, only those are scored: no tracker runs unless asked for.
+    let default: &[Preset] = if results.is_empty() {
+        &[Preset::Head]
+    } else {
+        &[]
+    };
+    let configs = run.configs(configs, default, *edge_threshold)?;
+    let mut protocols = protocols.clone();
+    protocols.sort();
+    protocols.dedup();
+    let mut names: Vec<&str> = Vec::new();
+    for name in configs
+        .iter()
+        .map(|c| c.name.as_str())
+        .chain(results.iter().map(|r| r.0.as_str()))
+    {
+        check_name(name, "--tracker")?;
+        if names.contains(&name) {
+            return Err(AppError::setting(
+                "--tracker",
+                format!("{name} is given twice (trackers and --results names must differ)"),
+            ));
+        }
+        names.push(name);
+    }
+    let mut inputs: Vec<&Path> = sequences.iter().map(PathBuf::as_path).collect();
+    inputs.extend(results.iter().map(|r| r.1.as_path()));
+    // Results are written after every run: an output folder that cannot be made, or is in use,
+    // is found before that.
+    let _folder = OutputFolder::open(out, &inputs)?;
+    let prepared: Vec<Prepared> = sequences
+        .iter()
+        .map(|d| prepare(d, &protocols))
+        .collect::<Result<_>>()?;
+    for (i, p) in prepared.iter().enumerate() {
+        if prepared[..i].iter().any(|q| q.name == p.name) {
+            return Err(AppError::setting(
+                "SEQUENCES",
+                format!(
+                    "two sequences are named {} ({}): their box files would collide",
+                    p.name,
+                    p.dir.display()
+                ),
+            ));
+        }
+    }
+    // Other trackers' boxes, read and scored before any tracking, so that a missing file is
+    // found at once. rows[protocol] holds (sequence, tracker, runs' outcomes) in a fixed order.
+    let mut scored: Vec<Vec<(usize, String, Vec<RunOutcome>)>> =
+        protocols.iter().map(|_| Vec::new()).collect();
+    for (si, seq) in prepared.iter().enumerate() {
+        for (pi, &protocol) in protocols.iter().enumerate() {
+            for (name, dir) in &results {
+                let mut outcomes = Vec::new();
+                for (k, start) in seq.starts[pi].iter().enumerate() {
+                    let path = boxes_path(dir, protocol, name, &seq.name, k);
+                    let boxes = read_boxes(&path, seq.truth.len())?;
+                    if let Some(metrics) = score_run(&boxes, &seq.truth, start.frame, None)? {
+                        outcomes.push(RunOutcome {
+                            boxes: Vec::new(),
+                            metrics,
+                            seconds: None,
+                        });
+                    }
+                }
+                scored[pi].push((si, name.clone(), outcomes));
+            }
+        }
+    }
+    let total: usize = prepared
+        .iter()
+        .map(|s| s.starts.iter().map(Vec::len).sum::<usize>() * configs.len())
+        .sum();
+    let bar = progress_of(total as u64, *quiet, "OTB", "runs");
+    for (si, seq) in prepared.iter().enumerate() {
+        bar.set_message(format!("OTB ({})", seq.name));
+        let mut source = open_sequence(&seq.dir.to_string_lossy())?.source;
+        let frames = read_all(&mut source)?;
+        if frames.len() != seq.truth.len() {
+            return Err(AppError::input(
+                &seq.dir,
+                format!(
+                    "{} frames read, {} expected: the folder changed during the evaluation",
+                    frames.len(),
+                    seq.truth.len()
+                ),
+            ));
+        }
+        let jobs: Vec<(usize, usize, usize)> = (0..protocols.len())
+            .flat_map(|pi| {
+                (0..configs.len())
+                    .flat_map(move |ci| (0..seq.starts[pi].len()).map(move |k| (pi, ci, k)))
+            })
+            .collect();
+        let outcomes: Vec<Option<RunOutcome>> = jobs
+            .par_iter()
+            .map(|&(pi, ci, k)| {
+                let r = track_run(&frames, &seq.truth, &configs[ci], &seq.starts[pi][k]);
+                bar.inc(1);
+                r
+            })
+            .collect::<Result<_>>()?;
+        drop(frames);
+        let mut outcomes = outcomes.into_iter();
+        for (pi, &protocol) in protocols.iter().enumerate() {
+            for config in &configs {
+                let mut mine = Vec::new();
+                for k in 0..seq.starts[pi].len() {
+                    if let Some(Some(o)) = outcomes.next() {
+                        let path = boxes_path(out, protocol, &config.name, &seq.name, k);
+                        write_atomic(&path, boxes_text(&o.boxes).as_bytes())?;
+                        mine.push(o);
+                    }
+                }
+                scored[pi].push((si, config.name.clone(), mine));
+            }
+        }
+    }
+    bar.finish_and_clear();
+    // Rows in a fixed order: trackers (presets, configurations, then --results), sequences.
+    let mut sections = Vec::new();
+    for (pi, &protocol) in protocols.iter().enumerate() {
+        let mut rows = Vec::new();
+        for name in &names {
+            for (si, seq) in prepared.iter().enumerate() {
+                let Some((_, _, outcomes)) = scored[pi]
+                    .iter()
+                    .find(|(s, n, _)| *s == si && n.as_str() == *name)
+                else {
+                    continue;
+                };
+                let runs: Vec<(SequenceMetrics, Option<f64>)> = outcomes
+                    .iter()
+                    .map(|o| (o.metrics.clone(), o.seconds))
+                    .collect();
+                if let Some(metrics) = mean_over_runs(&runs) {
+                    rows.push(SequenceScore {
+                        sequence: seq.name.clone(),
+                        tracker: (*name).to_owned(),
+                        runs: runs.len(),
+                        metrics,
+                    });
+                }
+            }
+        }
+        let means = set_means(&rows);
+        let charts = super::plots::protocol_charts(protocol, &rows, &means)?;
+        sections.push((protocol, rows, means, charts));
+    }
+    let mut printed = String::new();
+    for (protocol, rows, _, charts) in &sections {
+        let dir = out.join(protocol.name());
+        let md = markdown(*protocol, rows);
+        write_atomic(&dir.join("otb.md"), md.as_bytes())?;
+        write_atomic(&dir.join("otb.csv"), csv(*protocol, rows).as_bytes())?;
+        for c in charts {
+            write_atomic(&dir.join("plots").join(&c.file), c.svg.as_bytes())?;
+        }
+        printed.push_str(&format!("## {}\n\n{md}\n", protocol.title()));
+    }
+    let page_sections: Vec<super::page::ProtocolSection<'_>> = sections
+        .iter()
+        .map(
+            |(protocol, rows, means, charts)| super::page::ProtocolSection {
+                protocol: *protocol,
+                rows,
+                means,
+                charts,
+            },
+        )
+        .collect();
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    write_atomic(
+        &out.join("index.html"),
+        super::page::render(&command, &page_sections).as_bytes(),
+    )?;
+    crate::output::print_stdout(&printed)
+}
