@@ -32,6 +32,21 @@ fn assert_photos_intact(photos: &Path) {
     }
 }
 
+/// `track run FRAMES --init DISC_INIT --out OUT --quiet EXTRA...` (the default tracker).
+fn run_disc(frames: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "run",
+        s(frames),
+        "--init",
+        DISC_INIT,
+        "--out",
+        s(out),
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    track(&args)
+}
+
 /// Every file below `dir` whose name marks it as a temporary output.
 fn temporaries(dir: &Path) -> Vec<PathBuf> {
     let mut found = Vec::new();
@@ -85,21 +100,7 @@ fn a_linked_overlay_folder_is_never_emptied() {
     let out = dir.path().join("out");
     std::fs::create_dir(&out).unwrap();
     std::os::unix::fs::symlink(&photos, out.join("overlay")).unwrap();
-    let run = |extra: &[&str]| {
-        let mut args = vec![
-            "run",
-            s(&frames),
-            "--init",
-            DISC_INIT,
-            "--tracker",
-            "m1",
-            "--out",
-            s(&out),
-            "--quiet",
-        ];
-        args.extend_from_slice(extra);
-        track(&args)
-    };
+    let run = |extra: &[&str]| run_disc(&frames, &out, &[&["--tracker", "m1"], extra].concat());
     // Without --overlay the link is not used: the run succeeds and leaves it alone.
     let o = run(&[]);
     assert!(o.status.success(), "{}", common::stderr(&o));
@@ -195,15 +196,7 @@ fn a_file_of_the_users_named_like_an_output_is_refused_not_replaced() {
     let out = dir.path().join("out");
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("boxes.txt"), "my own boxes").unwrap();
-    let o = track(&[
-        "run",
-        s(&frames),
-        "--init",
-        DISC_INIT,
-        "--out",
-        s(&out),
-        "--quiet",
-    ]);
+    let o = run_disc(&frames, &out, &[]);
     assert_eq!(o.status.code(), Some(4));
     let e = one_error_line(&o);
     assert!(
@@ -217,15 +210,7 @@ fn a_file_of_the_users_named_like_an_output_is_refused_not_replaced() {
     // A file of the user's beside the outputs survives every later run.
     std::fs::rename(out.join("boxes.txt"), out.join("notes.txt")).unwrap();
     for _ in 0..2 {
-        let o = track(&[
-            "run",
-            s(&frames),
-            "--init",
-            DISC_INIT,
-            "--out",
-            s(&out),
-            "--quiet",
-        ]);
+        let o = run_disc(&frames, &out, &[]);
         assert!(o.status.success(), "{}", common::stderr(&o));
     }
     assert_eq!(
@@ -274,15 +259,7 @@ fn two_runs_into_one_folder_at_once_are_refused() {
     wait_until(&mut first, "the first run holds the folder", || {
         manifest.exists()
     });
-    let o = track(&[
-        "run",
-        s(&frames),
-        "--init",
-        DISC_INIT,
-        "--out",
-        s(&out),
-        "--quiet",
-    ]);
+    let o = run_disc(&frames, &out, &[]);
     assert_eq!(o.status.code(), Some(4));
     let e = one_error_line(&o);
     assert!(e.contains("in use by another track command"), "{e}");
@@ -293,15 +270,7 @@ fn two_runs_into_one_folder_at_once_are_refused() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["frames"], 1);
     // Free again once it has finished.
-    let o = track(&[
-        "run",
-        s(&frames),
-        "--init",
-        DISC_INIT,
-        "--out",
-        s(&out),
-        "--quiet",
-    ]);
+    let o = run_disc(&frames, &out, &[]);
     assert!(o.status.success(), "{}", common::stderr(&o));
 }
 
@@ -332,16 +301,7 @@ fn the_temporaries_of_a_killed_run_are_removed_by_the_next() {
             .open(&manifest)
             .unwrap();
         std::io::Write::write_all(&mut m, b"summary.json\n").unwrap();
-        let o = track(&[
-            "run",
-            s(&frames),
-            "--init",
-            DISC_INIT,
-            "--out",
-            s(&out),
-            "--overlay",
-            "--quiet",
-        ]);
+        let o = run_disc(&frames, &out, &["--overlay"]);
         assert!(o.status.success(), "{}", common::stderr(&o));
         assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
         assert!(out.join("summary.json").is_file());

@@ -142,12 +142,14 @@ impl OutputFolder {
         matching: Option<&dyn Fn(&Path) -> bool>,
     ) -> Result<()> {
         let path = self.state.root.join(relative);
-        check_no_link_below(&self.state.root, &path)?;
         match matching {
-            None => check_not_foreign(&path),
+            None => {
+                check_no_link_below(&self.state.root, &path)?;
+                check_not_foreign(&path)
+            }
             Some(matches) => {
                 // The folder itself is written into, so it may not be a link either.
-                check_no_link_below(&self.state.root, &path.join("_"))?;
+                check_no_link_in(&self.state.root, &path)?;
                 let Ok(entries) = std::fs::read_dir(&path) else {
                     return Ok(());
                 };
@@ -271,15 +273,19 @@ fn remove_temporaries(path: &Path) -> Result<()> {
 
 /// Refuses `path` when a folder between `root` and it is a symbolic link.
 fn check_no_link_below(root: &Path, path: &Path) -> Result<()> {
-    let Ok(relative) = path.strip_prefix(root) else {
+    match path.parent() {
+        Some(dir) => check_no_link_in(root, dir),
+        None => Ok(()),
+    }
+}
+
+/// Refuses the folder `dir` when it, or a folder between `root` and it, is a symbolic link.
+fn check_no_link_in(root: &Path, dir: &Path) -> Result<()> {
+    let Ok(relative) = dir.strip_prefix(root) else {
         return Ok(());
     };
     let mut at = root.to_path_buf();
-    let mut parts = relative.components().peekable();
-    while let Some(part) = parts.next() {
-        if parts.peek().is_none() {
-            break;
-        }
+    for part in relative.components() {
         at.push(part);
         if std::fs::symlink_metadata(&at).is_ok_and(|m| m.file_type().is_symlink()) {
             return Err(write_error(
