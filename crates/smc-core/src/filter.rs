@@ -47,6 +47,13 @@ pub struct FilterSettings {
     /// and costs nothing.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub history: Option<HistorySettings>,
+    /// Temper the likelihood so that its conditional effective sample size stays at or above
+    /// this fraction of N ([`crate::temper::tempering_exponent`]): each step's likelihood is
+    /// raised to the largest power φ ∈ (0, 1] that keeps the floor. With equal weights before the
+    /// update and the bootstrap proposal, that is the ESS after weighting. `None` (the default): never tempered, the update of
+    /// Odobez Eq. 3 as printed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_ess_fraction: Option<f64>,
 }
 
 impl Default for FilterSettings {
@@ -57,6 +64,7 @@ impl Default for FilterSettings {
             parallel: false,
             parallel_min_chunk: 64,
             history: None,
+            min_ess_fraction: None,
         }
     }
 }
@@ -65,8 +73,8 @@ impl FilterSettings {
     /// Checks every field.
     ///
     /// # Errors
-    /// [`Error::InvalidSetting`] when the threshold is outside (0, 1] (or NaN), the output size is
-    /// zero, the chunk size is zero, or the history settings are invalid.
+    /// [`Error::InvalidSetting`] when the threshold or the ESS floor is outside (0, 1] (or NaN),
+    /// the output size is zero, the chunk size is zero, or the history settings are invalid.
     pub fn validate(&self) -> Result<()> {
         let t = self.resample_threshold;
         if !(t > 0.0 && t <= 1.0) {
@@ -89,6 +97,14 @@ impl FilterSettings {
         }
         if let Some(history) = &self.history {
             history.validate()?;
+        }
+        if let Some(f) = self.min_ess_fraction
+            && !(f > 0.0 && f <= 1.0)
+        {
+            return Err(Error::InvalidSetting {
+                name: "min_ess_fraction",
+                reason: format!("{f} is outside (0, 1]"),
+            });
         }
         Ok(())
     }
@@ -114,6 +130,9 @@ pub struct WeightReport {
     pub max_weight: f64,
     /// ESS after the update.
     pub ess: f64,
+    /// The exponent the likelihood was raised to ([`FilterSettings::min_ess_fraction`]; 1 when
+    /// not tempered).
+    pub exponent: f64,
 }
 
 /// Per-step diagnostics of [`ParticleFilter::step`].
@@ -131,6 +150,8 @@ pub struct StepDiagnostics {
     pub log_evidence_increment: f64,
     /// ESS at the end of the step (after weighting).
     pub ess_after: f64,
+    /// The exponent the likelihood was raised to (1 when not tempered).
+    pub tempering_exponent: f64,
 }
 
 /// A particle filter: settings plus the reusable buffers of a step.
@@ -368,22 +389,98 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
         D: Dynamics<State = S> + ?Sized,
         O: Observation<State = S> + ?Sized,
     {
-        let n = set.len();
         let mut log_likelihoods = std::mem::take(&mut self.log_likelihoods);
-        log_likelihoods.clear();
-        log_likelihoods.resize(n, 0.0);
+        self.evaluate(set, observation, &mut log_likelihoods);
+        let result = match self.settings.min_ess_fraction {
+            Some(fraction) => self.temper_and_weight(
+                set,
+                proposal,
+                prior,
+                &mut log_likelihoods,
+                step,
+                fraction * set.len() as f64,
+            ),
+            None => self.weight_with_log_likelihoods(set, proposal, prior, &log_likelihoods, step),
+        };
+        self.log_likelihoods = log_likelihoods;
+        result
+    }
+
+    /// log p(z | x^i) of every particle into `out` (through [`Observation::log_likelihood_batch`],
+    /// in chunks on the parallel path).
+    fn evaluate<O: Observation<State = S> + ?Sized>(
+        &self,
+        set: &ParticleSet<S>,
+        observation: &O,
+        out: &mut Vec<f64>,
+    ) {
+        let n = set.len();
+        out.clear();
+        out.resize(n, 0.0);
         if self.settings.parallel {
             let chunk = self.chunk(n);
             set.states
                 .par_chunks(chunk)
-                .zip(log_likelihoods.par_chunks_mut(chunk))
-                .for_each(|(s, out)| observation.log_likelihood_batch(s, out));
+                .zip(out.par_chunks_mut(chunk))
+                .for_each(|(s, o)| observation.log_likelihood_batch(s, o));
         } else {
-            observation.log_likelihood_batch(&set.states, &mut log_likelihoods);
+            observation.log_likelihood_batch(&set.states, out);
         }
-        let result = self.weight_with_log_likelihoods(set, proposal, prior, &log_likelihoods, step);
-        self.log_likelihoods = log_likelihoods;
-        result
+    }
+
+    /// The weighting of [`ParticleFilter::weight`] with a tempered likelihood
+    /// ([`FilterSettings::min_ess_fraction`], [`crate::temper`]): the log-likelihoods are first
+    /// multiplied by the largest exponent φ ∈ (0, 1] that keeps the conditional effective sample size of the
+    /// updated weights at or above `min_ess`. Only the likelihood is tempered: the previous
+    /// weights and the prior-over-proposal ratio enter at full strength.
+    fn temper_and_weight<P, D>(
+        &mut self,
+        set: &mut ParticleSet<S>,
+        proposal: &P,
+        prior: Option<&D>,
+        log_likelihoods: &mut [f64],
+        step: u64,
+        min_ess: f64,
+    ) -> Result<WeightReport>
+    where
+        P: Proposal<State = S> + ?Sized,
+        D: Dynamics<State = S> + ?Sized,
+    {
+        let n = set.len();
+        // What the update adds besides the likelihood: the previous log weight and log p/q.
+        let mut offsets = std::mem::take(&mut self.log_increments);
+        offsets.clear();
+        offsets.extend_from_slice(set.log_weights());
+        if let Some(prior) = prior {
+            check_len("previous states", n, self.previous.len())?;
+            for (i, (o, (prev, next))) in offsets
+                .iter_mut()
+                .zip(self.previous.iter().zip(set.states.iter()))
+                .enumerate()
+            {
+                *o += prior.log_density(prev, next) - proposal.log_density(i, prev, next);
+            }
+        }
+        let (mut weights, mut scratch) = (Vec::new(), Vec::new());
+        let tempered = crate::temper::tempering_exponent(
+            log_likelihoods,
+            &offsets,
+            min_ess,
+            &mut weights,
+            &mut scratch,
+        );
+        self.log_increments = offsets;
+        let tempered = tempered.map_err(|e| match e {
+            Error::InvalidWeights { reason } => Error::DegenerateWeights { step, reason },
+            other => other,
+        })?;
+        crate::temper::apply_exponent(log_likelihoods, tempered.exponent);
+        let report =
+            self.weight_with_log_likelihoods(set, proposal, prior, log_likelihoods, step)?;
+        Ok(WeightReport {
+            exponent: tempered.exponent,
+            ..report
+        })
     }
 
     /// Step 3 with likelihoods computed by the caller: applies Odobez Eq. 3,
@@ -446,6 +543,7 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
             log_evidence_increment,
             max_weight,
             ess: set.ess(),
+            exponent: 1.0,
         })
     }
 
@@ -481,6 +579,7 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
             max_weight: weighted.max_weight,
             log_evidence_increment: weighted.log_evidence_increment,
             ess_after: weighted.ess,
+            tempering_exponent: weighted.exponent,
         })
     }
 

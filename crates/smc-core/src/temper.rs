@@ -13,7 +13,8 @@
 //! d/dψ E_ψ[l] = Var_ψ(l) ≥ 0, E_{2φ}[l] ≥ E_φ[l]: the ESS never grows with φ. The set
 //! {φ : ESS(φ) ≥ min_ess} is therefore an interval (0, φ*], and bisection converges to φ*.
 
-use crate::error::Degeneracy;
+use crate::error::{Degeneracy, Error};
+use crate::particles::check_len;
 use crate::weights::{effective_sample_size, normalize_log_weights};
 
 /// Bisection steps: φ is found to within 2⁻³⁰ of the largest exponent that keeps the floor.
@@ -85,6 +86,106 @@ pub fn temper(
     }
     let ess = apply(lo, log_weights, weights)?;
     Ok(Tempered { exponent: lo, ess })
+}
+
+/// The largest exponent φ ∈ (0, 1] whose tempered likelihood keeps a *conditional* effective
+/// sample size of at least `min_cess` (φ = 1 when the untempered likelihood already does), for
+/// an update whose log weights are `offsets[i]` + φ · `log_likelihoods[i]`: the offsets (the
+/// previous log weights and the prior-over-proposal ratio of Odobez Eq. 3) enter at full
+/// strength, only the likelihood is tempered. `weights` receives the normalised updated weights
+/// at that φ; `scratch` is a buffer.
+///
+/// The conditional ESS (Zhou, Johansen & Aston 2016, §3.2) measures what the likelihood alone
+/// does to the weights the offsets give, b ∝ exp(offsets): with u_i = p(z | x_i)^φ,
+/// CESS(φ) = N (Σ b_i u_i)² / Σ b_i u_i². With equal offsets it is the ESS of the updated
+/// weights, as [`temper`] uses. Unlike the ESS, it can always be met (CESS(0) = N), so an update
+/// whose offsets are themselves uneven (a proposal far from the prior) never drives φ to 0 and
+/// the data out.
+///
+/// # Errors
+/// [`Error::LengthMismatch`] when the slices differ in length; [`Error::InvalidWeights`] when
+/// some value is NaN or +∞ or every updated weight is zero.
+///
+/// # Examples
+/// ```
+/// use smc_core::temper::tempering_exponent;
+/// let mut ll = vec![0.0; 100];
+/// ll[0] = 40.0;
+/// let offsets = vec![-(100f64).ln(); 100];
+/// let (mut w, mut s) = (Vec::new(), Vec::new());
+/// let t = tempering_exponent(&ll, &offsets, 30.0, &mut w, &mut s)?;
+/// assert!(t.exponent < 1.0 && t.ess >= 30.0 - 1e-6);
+/// # Ok::<(), smc_core::Error>(())
+/// ```
+pub fn tempering_exponent(
+    log_likelihoods: &[f64],
+    offsets: &[f64],
+    min_cess: f64,
+    weights: &mut Vec<f64>,
+    scratch: &mut Vec<f64>,
+) -> crate::Result<Tempered> {
+    check_len("offsets", log_likelihoods.len(), offsets.len())?;
+    let invalid = |reason| Error::InvalidWeights { reason };
+    // b: the normalised weights of the offsets alone.
+    scratch.clear();
+    scratch.extend_from_slice(offsets);
+    let mut base = Vec::with_capacity(offsets.len());
+    normalize_log_weights(scratch, &mut base).map_err(invalid)?;
+    let n = log_likelihoods.len() as f64;
+    let mut apply = |phi: f64, w: &mut Vec<f64>| -> crate::Result<f64> {
+        scratch.clear();
+        scratch.extend(log_likelihoods.iter().zip(offsets).map(|(&l, &o)| {
+            // 0 · −∞ would be NaN: a particle with no likelihood keeps none at any exponent.
+            if l.is_infinite() { l + o } else { phi * l + o }
+        }));
+        normalize_log_weights(scratch, w).map_err(invalid)?;
+        // w_i ∝ b_i u_i, so u_i ∝ w_i / b_i where b_i > 0 (w_i = 0 where b_i = 0).
+        let (mut first, mut second) = (0.0, 0.0);
+        for (&wi, &bi) in w.iter().zip(&base) {
+            if bi > 0.0 {
+                first += wi;
+                second += wi * wi / bi;
+            }
+        }
+        Ok(if second > 0.0 {
+            n * first * first / second
+        } else {
+            0.0
+        })
+    };
+    let cess = apply(1.0, weights)?;
+    if cess >= min_cess {
+        return Ok(Tempered {
+            exponent: 1.0,
+            ess: effective_sample_size(weights),
+        });
+    }
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..BISECTION_STEPS {
+        let mid = 0.5 * (lo + hi);
+        if apply(mid, weights)? >= min_cess {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    apply(lo, weights)?;
+    Ok(Tempered {
+        exponent: lo,
+        ess: effective_sample_size(weights),
+    })
+}
+
+/// `log_likelihoods` raised to the power `exponent` in place (−∞ stays −∞).
+pub fn apply_exponent(log_likelihoods: &mut [f64], exponent: f64) {
+    if exponent == 1.0 {
+        return;
+    }
+    for l in log_likelihoods {
+        if l.is_finite() {
+            *l *= exponent;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -159,6 +260,49 @@ mod tests {
         let (_, w, t) = run(&[5.0, 0.0, -3.0], 10.0);
         assert!(t.exponent < 1e-8, "{t:?}");
         assert!(w.iter().all(|x| (x - 1.0 / 3.0).abs() < 1e-7), "{w:?}");
+    }
+
+    #[test]
+    fn offsets_are_not_tempered_and_zero_offsets_agree_with_temper() {
+        let mut ll = vec![0.0; 50];
+        ll[3] = 30.0;
+        let zeros = vec![0.0; 50];
+        let (mut w, mut s) = (Vec::new(), Vec::new());
+        let t = tempering_exponent(&ll, &zeros, 20.0, &mut w, &mut s).unwrap();
+        let (_, w2, t2) = run(&ll, 20.0);
+        assert_eq!(t, t2);
+        assert_eq!(w, w2);
+        // An offset of −∞ keeps a particle out whatever φ; a large offset on another particle
+        // is kept at full strength (only the likelihood is tempered).
+        let mut offsets = vec![0.0; 50];
+        offsets[3] = f64::NEG_INFINITY;
+        let t = tempering_exponent(&ll, &offsets, 20.0, &mut w, &mut s).unwrap();
+        assert_eq!(t.exponent, 1.0);
+        assert_eq!(w[3], 0.0);
+        // Uneven offsets alone (one particle e^8 above the rest) are not tempered away: the
+        // conditional ESS measures the likelihood only, and is N at φ = 0.
+        let mut offsets = vec![0.0; 50];
+        offsets[5] = 8.0;
+        let t = tempering_exponent(&ll, &offsets, 20.0, &mut w, &mut s).unwrap();
+        assert!(t.exponent > 0.0 && t.exponent < 1.0, "{t:?}");
+        let b: Vec<f64> = {
+            let mut o = offsets.clone();
+            let mut b = Vec::new();
+            normalize_log_weights(&mut o, &mut b).unwrap();
+            b
+        };
+        let u: Vec<f64> = ll.iter().map(|l| (t.exponent * l).exp()).collect();
+        let first: f64 = b.iter().zip(&u).map(|(b, u)| b * u).sum();
+        let second: f64 = b.iter().zip(&u).map(|(b, u)| b * u * u).sum();
+        let cess = 50.0 * first * first / second;
+        assert!((cess - 20.0).abs() < 1e-4, "{cess}");
+        for i in 0..50 {
+            assert!((w[i] - b[i] * u[i] / first).abs() < 1e-12);
+        }
+        assert!(tempering_exponent(&ll, &offsets[..3], 1.0, &mut w, &mut s).is_err());
+        let mut scaled = ll.clone();
+        apply_exponent(&mut scaled, 0.5);
+        assert_eq!(scaled[3], 15.0);
     }
 
     proptest! {

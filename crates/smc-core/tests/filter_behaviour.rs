@@ -246,3 +246,71 @@ fn wrong_lengths_are_errors() {
         Err(Error::LengthMismatch { .. })
     ));
 }
+
+#[test]
+fn a_tempered_step_keeps_the_ess_floor_and_tempers_the_likelihood_only() {
+    // A likelihood so sharp that untempered weights sit on a handful of particles.
+    let obs = FnObservation::new(|x: &f64| -0.5 * (x - 40.0).powi(2) / 0.01);
+    for seed in [1, 2, 3] {
+        let settings = FilterSettings {
+            min_ess_fraction: Some(0.3),
+            ..FilterSettings::default()
+        };
+        let mut tempered_set = set(200);
+        let mut tempered = ParticleFilter::new(settings.clone()).unwrap();
+        let mut plain_set = set(200);
+        let mut plain = ParticleFilter::new(FilterSettings::default()).unwrap();
+        for k in 0..3 {
+            let d = tempered
+                .step_bootstrap(&mut tempered_set, &Shift, &obs, &Systematic, seed, k)
+                .unwrap();
+            let p = plain
+                .step_bootstrap(&mut plain_set, &Shift, &obs, &Systematic, seed, k)
+                .unwrap();
+            assert!(d.ess_after >= 0.3 * 200.0 * (1.0 - 1e-9), "{d:?}");
+            assert!(
+                p.ess_after < 0.3 * 200.0,
+                "the test needs a sharp likelihood: {p:?}"
+            );
+            assert!(
+                d.tempering_exponent > 0.0 && d.tempering_exponent < 1.0,
+                "{d:?}"
+            );
+            assert_eq!(p.tempering_exponent, 1.0);
+            // The weights are the likelihood raised to φ, normalised.
+            let mut expected: Vec<f64> = tempered_set
+                .states()
+                .iter()
+                .map(|x| d.tempering_exponent * -0.5 * (x - 40.0).powi(2) / 0.01)
+                .collect();
+            let mut w = Vec::new();
+            smc_core::weights::normalize_log_weights(&mut expected, &mut w).unwrap();
+            for (a, b) in w.iter().zip(tempered_set.weights()) {
+                assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+            }
+        }
+    }
+    // A likelihood that keeps the floor is not tempered: the same set as without the setting.
+    let flat = FnObservation::new(|x: &f64| -0.5 * (x - 40.0).powi(2) / 1e4);
+    let (mut a, mut b) = (set(100), set(100));
+    let settings = FilterSettings {
+        min_ess_fraction: Some(0.3),
+        ..FilterSettings::default()
+    };
+    let mut fa = ParticleFilter::new(settings).unwrap();
+    let mut fb = ParticleFilter::new(FilterSettings::default()).unwrap();
+    let da = fa
+        .step_bootstrap(&mut a, &Shift, &flat, &Systematic, 4, 0)
+        .unwrap();
+    fb.step_bootstrap(&mut b, &Shift, &flat, &Systematic, 4, 0)
+        .unwrap();
+    assert_eq!(da.tempering_exponent, 1.0);
+    assert_eq!(a, b);
+    for bad in [0.0, -0.1, 1.5, f64::NAN] {
+        let settings = FilterSettings {
+            min_ess_fraction: Some(bad),
+            ..FilterSettings::default()
+        };
+        assert!(ParticleFilter::<f64>::new(settings).is_err(), "{bad}");
+    }
+}

@@ -5,6 +5,7 @@ use dbn_switch::{ClutterConfig, LambdaModel, OcclusionConfig, StatusConfig};
 use serde::{Deserialize, Serialize};
 use smc_core::{FilterSettings, ResamplingScheme};
 
+use crate::appearance::AppearanceSettings;
 use crate::dynamics::{DynamicsSettings, NoiseKind};
 use crate::observation::{ImplicitMotionSettings, LikelihoodSettings};
 use crate::reacquire::ReacquisitionSettings;
@@ -163,6 +164,11 @@ pub struct TrackerConfig {
     /// `particles`, `seed` and these settings only.
     #[serde(default)]
     pub region: Option<RegionSettings>,
+    /// The appearance model and its colour-contrast, template and contour-contrast terms
+    /// ([`crate::appearance`]); `None` (every paper preset): off. With it, the lock chain on
+    /// the estimate's colour reports the track's status unless Wu's status process does.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub appearance: Option<AppearanceSettings>,
 }
 
 fn yes() -> bool {
@@ -222,6 +228,24 @@ impl TrackerConfig {
         }
         self.dynamics.validate()?;
         self.likelihood.validate()?;
+        if self.likelihood.is_empty() && self.appearance.is_none() {
+            return Err(Error::InvalidSetting {
+                name: "likelihood",
+                reason: "at least one of shape, implicit_motion, clutter or appearance is needed"
+                    .into(),
+            });
+        }
+        if let Some(a) = &self.appearance {
+            a.validate()?;
+            if self.space != ShapeSpace::Odobez {
+                return Err(Error::InvalidSetting {
+                    name: "appearance",
+                    reason: "the appearance terms read axis-aligned ellipses: they need the \
+                             odobez shape space"
+                        .into(),
+                });
+            }
+        }
         if let Some(r) = &self.reacquisition {
             r.validate()?;
         }
@@ -597,6 +621,7 @@ impl Preset {
             working_radius: None,
             reacquisition: None,
             region: None,
+            appearance: None,
         };
         let wu = TrackerConfig {
             space: ShapeSpace::Affine,

@@ -56,12 +56,14 @@
 #[doc = include_str!("../README.md")]
 mod readme_doctest {}
 
+pub mod appearance;
 mod cluster;
 mod config;
 mod dynamics;
 mod error;
 mod frame;
-mod observation;
+mod monitor;
+pub mod observation;
 mod particle;
 mod proposal;
 pub mod ranges;
@@ -70,9 +72,9 @@ pub mod region;
 pub mod smoothing;
 mod space;
 mod tracker;
-mod visibility;
 pub mod working_scale;
 
+pub use appearance::AppearanceSettings;
 pub use config::{
     AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, ClutterMode, ConfigFormat, DEFAULT_PARTICLES,
     DEFAULT_SEED, MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings, OCCLUSION_ARC,
@@ -82,14 +84,16 @@ pub use config::{
 pub use dynamics::{DynamicsSettings, NoiseKind};
 pub use error::{Error, Result};
 pub use frame::{Frame, FrameBuf};
-pub use observation::{ImplicitMotionSettings, LikelihoodSettings};
+pub use observation::{FrameContext, ImplicitMotionSettings, LikelihoodSettings, ObservationTerm};
 pub use particle::Particle;
 pub use reacquire::ReacquisitionSettings;
 pub use region::{RegionSettings, RegionTracker};
 pub use smc_core::smooth::SmootherSettings;
 pub use smoothing::{ChainCounts, SmoothedRun, SwitchingStatistics};
 pub use space::{STATE_SLOTS, ShapeSpace, StateVector};
-pub use tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse, build, status_from_gamma};
+pub use tracker::{
+    Estimate, ParticleTracker, Tracker, WeightedEllipse, build, build_with_terms, status_from_gamma,
+};
 pub use working_scale::{ScaledTracker, WorkingScale};
 
 // The types of `Estimate`'s public fields, and of a tracker's inputs, so that a user needs no

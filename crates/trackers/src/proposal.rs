@@ -279,20 +279,6 @@ impl MotionProposal<'_> {
     }
 }
 
-/// log p_c1(α̂_k, α_k) = log N(α̂_k; α_k, Λ̂_k) (Odobez Eq. 21) for a propagated particle, from the
-/// motion of its cluster; 0 when the particle has no cluster. Numerically the same Gaussian as the
-/// motion proposal, which is why it cancels against q in Eq. 24.
-pub fn log_motion_consistency(space: ShapeSpace, clusters: &[ClusterMotion], p: &Particle) -> f64 {
-    match clusters.get(p.cluster as usize) {
-        Some(motion) => {
-            let mut mean = p.prev;
-            axpy(&mut mean, 1.0, &motion.derivative);
-            motion.log_density(space, &mean, &p.now)
-        }
-        None => 0.0,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -455,7 +441,11 @@ mod tests {
         for _ in 0..20 {
             let next = q.sample(0, &previous, &mut rng);
             let log_q = q.log_density(0, &previous, &next);
-            let log_pc1 = log_motion_consistency(ShapeSpace::Odobez, &clusters, &next);
+            let log_pc1 = crate::observation::motion_consistency::log_motion_consistency(
+                ShapeSpace::Odobez,
+                &clusters,
+                &next,
+            );
             assert!((log_q - log_pc1).abs() < 1e-12, "{log_q} vs {log_pc1}");
         }
     }

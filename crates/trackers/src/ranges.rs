@@ -197,6 +197,7 @@ pub const SETTING_RANGES: &[SettingRange] = &[
     optional(closed("filter.output_size", 1.0, MAX_PARTICLES as f64)),
     closed("filter.parallel_min_chunk", 1.0, MAX_PARTICLES as f64),
     optional(closed("filter.history.max_frames", 1.0, 1e9)),
+    optional(positive("filter.min_ess_fraction", 1.0)),
     // reacquisition
     closed("reacquisition.lock_gamma", 0.0, 1.0),
     positive("reacquisition.shape_tolerance", 10.0),
@@ -208,6 +209,27 @@ pub const SETTING_RANGES: &[SettingRange] = &[
     closed("reacquisition.position_gain", 0.0, 1.0),
     closed("reacquisition.velocity_gain", 0.0, 1.0),
     closed("reacquisition.shape_gain", 0.0, 1.0),
+    // appearance
+    closed("appearance.working_size", 8.0, 256.0),
+    closed("appearance.search", 1.0, 20.0),
+    closed("appearance.hs_bins", 2.0, 32.0),
+    closed("appearance.value_bins", 2.0, 64.0),
+    closed("appearance.contrast_ring", 1.05, 4.0),
+    closed("appearance.background_ring", 1.0, 8.0),
+    closed("appearance.colour_weight", 0.0, 1000.0),
+    closed("appearance.template_weight", 0.0, 1000.0),
+    closed("appearance.contour_weight", 0.0, 1000.0),
+    closed("appearance.template_grid", 4.0, 64.0),
+    closed("appearance.learnt_share", 0.0, 1.0),
+    closed("appearance.target_rate", 0.0, 1.0),
+    closed("appearance.background_rate", 0.0, 1.0),
+    closed("appearance.template_rate", 0.0, 1.0),
+    SettingRange {
+        low_inclusive: false,
+        high_inclusive: false,
+        ..closed("appearance.lock_persistence", 0.5, 1.0)
+    },
+    closed("appearance.max_detection_centres", 1.0, 1e6),
     // region
     closed("region.working_size", 8.0, 256.0),
     closed("region.search", 1.0, 20.0),
@@ -349,6 +371,11 @@ mod tests {
         v["filter"]["output_size"] = 40.into();
         v["filter"]["history"] = serde_json::json!({"max_frames": 10});
         v["working_radius"] = 12.0.into();
+        out.push(v);
+        // The appearance terms and tempering, on Odobez's space.
+        let mut v = serde_json::to_value(Preset::M1.config(50, 1)).unwrap();
+        v["appearance"] = serde_json::to_value(crate::AppearanceSettings::default()).unwrap();
+        v["filter"]["min_ess_fraction"] = 0.3.into();
         out.push(v);
         for v in &out {
             serde_json::from_value::<TrackerConfig>(v.clone())

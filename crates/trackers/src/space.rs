@@ -94,6 +94,16 @@ impl ShapeSpace {
         }
     }
 
+    /// Sets the centre (translation) of a state.
+    pub fn set_centre(self, x: &mut StateVector, c: [f64; 2]) {
+        let (tx, ty) = match self {
+            ShapeSpace::Odobez => (0, 1),
+            ShapeSpace::Affine => (4, 5),
+        };
+        x[tx] = c[0];
+        x[ty] = c[1];
+    }
+
     /// The mean radius of a state in pixels: s for Odobez, √|det A| for Affine.
     pub fn scale(self, x: &StateVector) -> f64 {
         match self {

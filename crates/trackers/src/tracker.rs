@@ -13,17 +13,18 @@ use smc_core::smooth::{SmootherSettings, smooth_marginals};
 use smc_core::{Bootstrap, ParticleFilter, ParticleSet, StepDiagnostics};
 use vision_core::{BoundingBox, Ellipse, GreyImage};
 
+use crate::appearance::Appearance;
 use crate::cluster::{Clustering, cluster_particles};
 use crate::config::{ClutterMode, OcclusionMode, PoseEstimator, ProposalKind, TrackerConfig};
 use crate::dynamics::{ClutterProcess, OcclusionModel, TrackerDynamics};
 use crate::frame::Frame;
-use crate::observation::{FrameObservation, LikelihoodModel, ReferenceLines};
+use crate::monitor::visibility::{self, Visibility};
+use crate::observation::{FrameContext, FrameObservation, LikelihoodModel, ReferenceLines};
 use crate::particle::{Particle, default_status};
 use crate::proposal::{ClusterMotion, ExploringPrior, MotionProposal, state_increment};
 use crate::reacquire::{Reacquisition, TrackMemory};
 use crate::smoothing::SmoothedRun;
 use crate::space::{STATE_SLOTS, ShapeBounds, StateVector, UNBOUNDED_CENTRE, axpy, pose_box};
-use crate::visibility::{self, Visibility};
 use crate::{Error, Result};
 
 /// What a tracker reports for one frame.
@@ -176,6 +177,32 @@ pub fn build(config: TrackerConfig) -> Result<Box<dyn Tracker>> {
     Ok(Box::new(crate::working_scale::ScaledTracker::new(config)?))
 }
 
+/// Builds the tracker a configuration describes, with `terms` of your own added to its
+/// likelihood (see [`crate::observation::ObservationTerm`]). The terms see the frames and
+/// particles in the tracker's working pixels ([`crate::working_scale`]).
+///
+/// # Errors
+/// An invalid configuration, or one of the region tracker (`region` settings), which has no
+/// place for other terms.
+pub fn build_with_terms(
+    config: TrackerConfig,
+    terms: Vec<Box<dyn crate::ObservationTerm>>,
+) -> Result<Box<dyn Tracker>> {
+    if config.region.is_some() {
+        return Err(Error::InvalidSetting {
+            name: "region",
+            reason: "the region tracker takes no observation terms of yours".into(),
+        });
+    }
+    let mut inner = ParticleTracker::new(config)?;
+    for term in terms {
+        inner.likelihood.push(term);
+    }
+    Ok(Box::new(crate::working_scale::ScaledTracker::from_tracker(
+        inner,
+    )))
+}
+
 /// The particle-filter tracker behind every preset.
 #[derive(Debug)]
 pub struct ParticleTracker {
@@ -205,8 +232,14 @@ pub struct ParticleTracker {
     /// The memory after each of the last locked frames, oldest first: the anchor of the jump is
     /// the oldest (see [`crate::reacquire::ReacquisitionSettings::rollback`]).
     history: std::collections::VecDeque<TrackMemory>,
-    /// Whether a target is seen at all (with the status HMM only; see [`crate::visibility`]).
+    /// Whether a target is seen at all (with the status HMM only; see
+    /// [`crate::monitor::visibility`]).
     visibility: Option<Visibility>,
+    /// The target's appearance and its lock chain, when the configuration has them.
+    appearance: Option<Appearance>,
+    /// This frame's best appearance detection while the track is not locked: where the
+    /// reacquisition component draws (see [`crate::reacquire`]).
+    detection: Option<[f64; 2]>,
     size: (usize, usize),
     frame: usize,
 }
@@ -237,7 +270,11 @@ impl ParticleTracker {
                 reacquisition: None,
                 shape_anchor: None,
             },
-            likelihood: LikelihoodModel::new(config.space, &config.likelihood)?,
+            likelihood: LikelihoodModel::new(
+                config.space,
+                &config.likelihood,
+                config.appearance.as_ref(),
+            )?,
             filter: ParticleFilter::new(config.filter.clone())?,
             motion: MotionEstimator::new(config.motion.estimator)?,
             set: None,
@@ -255,6 +292,8 @@ impl ParticleTracker {
             memory: TrackMemory::new([0.0; STATE_SLOTS], 0),
             history: std::collections::VecDeque::new(),
             visibility: None,
+            appearance: None,
+            detection: None,
             size: (0, 0),
             frame: 0,
             config,
@@ -302,14 +341,22 @@ impl ParticleTracker {
             (self.config.dynamics.shape_reversion > 0.0).then(|| *self.memory.state());
         let current = frame.grey();
         let previous = GreyImage::new(self.size.0, self.size.1, &self.previous)?;
-        self.likelihood
-            .reference_counts(&current, &self.last_state, &mut self.reference)?;
+        self.likelihood.reference_counts(
+            self.config.space,
+            &current,
+            &self.last_state,
+            &mut self.reference,
+        )?;
         let observation = FrameObservation {
             model: &self.likelihood,
-            current,
-            previous,
-            clusters: &self.clusters,
-            reference: &self.reference,
+            frame: FrameContext {
+                space: self.config.space,
+                current,
+                previous,
+                clusters: &self.clusters,
+                reference: &self.reference,
+                appearance: self.appearance.as_ref(),
+            },
         };
         let filter = &mut self.filter;
         let weighted = match self.config.proposal {
@@ -538,7 +585,13 @@ impl ParticleTracker {
         }
         let space = self.config.space;
         let anchor = self.history.front().unwrap_or(&self.memory);
-        let (mean, velocity) = anchor.extrapolate(space, frame);
+        let (mut mean, mut velocity) = anchor.extrapolate(space, frame);
+        // With an appearance model, the jump is drawn around where the target's appearance is
+        // best in the frame, at rest, rather than where its last motion would have carried it.
+        if let Some(d) = self.detection {
+            space.set_centre(&mut mean, d);
+            space.set_centre(&mut velocity, [0.0, 0.0]);
+        }
         let mut sigmas = self.dynamics.settings.sigmas(space, &mean);
         for (j, s) in sigmas.iter_mut().enumerate().take(space.dim()) {
             if space.is_translation(j) {
@@ -655,6 +708,11 @@ impl Tracker for ParticleTracker {
         self.frame = 0;
         self.visibility =
             matches!(self.dynamics.occlusion, OcclusionModel::Status(_)).then(Visibility::default);
+        self.appearance = self
+            .config
+            .appearance
+            .map(|settings| Appearance::start(settings, &frame, &ellipse))
+            .transpose()?;
         self.last_state = centre;
         self.memory = TrackMemory::new(centre, 0);
         self.history.clear();
@@ -687,6 +745,17 @@ impl Tracker for ParticleTracker {
         } else {
             (0, 0)
         };
+        self.detection = None;
+        if let Some(appearance) = &mut self.appearance {
+            let last = self.config.space.pose(&self.last_state).to_ellipse();
+            if let Some(e) = last {
+                appearance.read(&frame, &e);
+                let unlocked = self.frame > self.memory.last_locked();
+                if unlocked && self.config.reacquisition.is_some() {
+                    self.detection = appearance.detect((e.a, e.b));
+                }
+            }
+        }
         let Some(mut set) = self.set.take() else {
             return Err(Error::NotInitialised);
         };
@@ -710,6 +779,15 @@ impl Tracker for ParticleTracker {
             gamma,
             status,
         } = estimated?;
+        let status = match (&mut self.appearance, status) {
+            (Some(appearance), None) => {
+                if let Some(e) = self.config.space.pose(&state).to_ellipse() {
+                    appearance.observe(&e)?;
+                }
+                Some(appearance.status())
+            }
+            (_, status) => status,
+        };
         self.frame += 1;
         self.last_state = state;
         self.remember_if_locked(&state, gamma, status.as_ref());
@@ -724,6 +802,7 @@ impl Tracker for ParticleTracker {
             max_weight: weighted.max_weight,
             log_evidence_increment: weighted.log_evidence_increment,
             ess_after: weighted.ess,
+            tempering_exponent: weighted.exponent,
         });
         report.clutter = clutter;
         report.gamma = gamma;

@@ -157,6 +157,9 @@ struct Shrinker {
     /// The frame averaged along x: `out.0` × `size.1`.
     half: Vec<f32>,
     pixels: Vec<f32>,
+    /// One colour channel shrunk, and the shrunk colour frame (interleaved RGB).
+    channel: Vec<f32>,
+    rgb: Vec<u8>,
 }
 
 impl Shrinker {
@@ -169,19 +172,49 @@ impl Shrinker {
             rows: AxisBoxes::new(height, out.1, scale.factor()),
             half: vec![0.0; out.0 * height],
             pixels: vec![0.0; out.0 * out.1],
+            channel: Vec::new(),
+            rgb: Vec::new(),
         }
     }
 
-    fn shrink(&mut self, data: &[f32]) -> &[f32] {
+    /// Shrinks a grey frame into `pixels`.
+    fn shrink(&mut self, data: &[f32]) {
+        let mut pixels = std::mem::take(&mut self.pixels);
+        self.shrink_into(|k| data[k], &mut pixels);
+        self.pixels = pixels;
+    }
+
+    /// Shrinks the colour of a frame (`order`: where R, G and B sit in each pixel) into
+    /// interleaved RGB (`rgb`), each channel averaged as the grey levels are.
+    fn shrink_colour(&mut self, rgb: &[u8], order: [usize; 3]) {
+        let (ow, oh) = self.out;
+        self.rgb.resize(3 * ow * oh, 0);
+        let mut channel = std::mem::take(&mut self.channel);
+        for (c, &offset) in order.iter().enumerate() {
+            self.shrink_into(|k| f32::from(rgb[3 * k + offset]), &mut channel);
+            for (o, v) in self.rgb.iter_mut().skip(c).step_by(3).zip(&channel) {
+                *o = v.round().clamp(0.0, 255.0) as u8;
+            }
+        }
+        self.channel = channel;
+    }
+
+    /// The box averages of the plane whose pixel k (row-major, the frame's size) is `value(k)`.
+    fn shrink_into(&mut self, value: impl Fn(usize) -> f32, out: &mut Vec<f32>) {
         let (w, h) = self.size;
         let ow = self.out.0;
         for y in 0..h {
-            let row = &data[y * w..(y + 1) * w];
             for (x, v) in self.half[y * ow..(y + 1) * ow].iter_mut().enumerate() {
-                *v = self.columns.taps(x).iter().map(|&(j, t)| t * row[j]).sum();
+                *v = self
+                    .columns
+                    .taps(x)
+                    .iter()
+                    .map(|&(j, t)| t * value(y * w + j))
+                    .sum();
             }
         }
-        for (y, out_row) in self.pixels.chunks_exact_mut(ow).enumerate() {
+        out.resize(ow * self.out.1, 0.0);
+        for (y, out_row) in out.chunks_exact_mut(ow).enumerate() {
             out_row.fill(0.0);
             for &(j, t) in self.rows.taps(y) {
                 let src = &self.half[j * ow..(j + 1) * ow];
@@ -190,7 +223,6 @@ impl Shrinker {
                 }
             }
         }
-        &self.pixels
     }
 }
 
@@ -209,11 +241,16 @@ impl ScaledTracker {
     /// # Errors
     /// An invalid configuration.
     pub fn new(config: TrackerConfig) -> Result<Self> {
-        Ok(Self {
-            inner: ParticleTracker::new(config)?,
+        Ok(Self::from_tracker(ParticleTracker::new(config)?))
+    }
+
+    /// `inner` run at the working scale of its configuration.
+    pub fn from_tracker(inner: ParticleTracker) -> Self {
+        Self {
+            inner,
             scale: WorkingScale::IDENTITY,
             shrinker: Shrinker::default(),
-        })
+        }
     }
 
     /// The scale chosen at initialisation (the identity before it).
@@ -243,8 +280,20 @@ impl ScaledTracker {
             });
         }
         let (ow, oh) = self.shrinker.out;
-        let pixels = self.shrinker.shrink(frame.data());
-        let estimate = step(&mut self.inner, Frame::new(ow, oh, pixels)?)?;
+        // Colour is shrunk only for a tracker that reads it (the appearance terms).
+        let colour = frame
+            .colour()
+            .filter(|_| self.inner.config().appearance.is_some());
+        if let Some((rgb, order)) = colour {
+            self.shrinker.shrink_colour(rgb, order);
+        }
+        self.shrinker.shrink(frame.data());
+        let pixels = &self.shrinker.pixels;
+        let working = match colour {
+            Some(_) => Frame::with_rgb(ow, oh, pixels, &self.shrinker.rgb)?,
+            None => Frame::new(ow, oh, pixels)?,
+        };
+        let estimate = step(&mut self.inner, working)?;
         Ok(self
             .scale
             .estimate_to_frame(self.inner.config().space, estimate))
@@ -325,7 +374,8 @@ mod tests {
         let mut shrinker = Shrinker::new(scale, w, h);
         let (ow, oh) = shrinker.out;
         assert_eq!((ow, oh), (25, 19));
-        let small = shrinker.shrink(&data).to_vec();
+        shrinker.shrink(&data);
+        let small = shrinker.pixels.clone();
         for y in 0..oh {
             for x in 0..ow {
                 let expected =
@@ -334,6 +384,28 @@ mod tests {
                     (small[y * ow + x] as f64 - expected).abs() < 1e-3,
                     "{x},{y}"
                 );
+            }
+        }
+        // Colour is averaged channel by channel, whatever the order of the components: a
+        // frame stored BGR with B = x, G = y, R = 200 − x comes out RGB.
+        let bgr: Vec<u8> = (0..w * h)
+            .flat_map(|k| {
+                let (x, y) = ((k % w) as u8, (k / w) as u8);
+                [x, y, 200 - x]
+            })
+            .collect();
+        shrinker.shrink_colour(&bgr, [2, 1, 0]);
+        for y in 0..oh {
+            for x in 0..ow {
+                let (fx, fy) = (
+                    scale.point_to_frame(x as f64),
+                    scale.point_to_frame(y as f64),
+                );
+                let px = &shrinker.rgb[3 * (y * ow + x)..3 * (y * ow + x) + 3];
+                let expected = [200.0 - fx, fy, fx];
+                for (c, e) in expected.iter().enumerate() {
+                    assert!((f64::from(px[c]) - e).abs() <= 0.51, "{x},{y} channel {c}");
+                }
             }
         }
         let e = Ellipse {

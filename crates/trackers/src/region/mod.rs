@@ -26,12 +26,9 @@
 //! particles is drawn around the centre of best colour contrast found by a dense search of the
 //! window; while P(lost) is high that share grows and the window is the whole frame.
 
-mod calibration;
-mod colour;
 mod settings;
 pub(crate) mod status;
 mod tracker;
-mod window;
 
 pub use settings::RegionSettings;
 pub use tracker::RegionTracker;

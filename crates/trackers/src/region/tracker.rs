@@ -12,11 +12,11 @@ use smc_core::rng::{particle_rng, resampler_rng};
 use smc_core::{Resampler, Systematic};
 use vision_core::{BoundingBox, Ellipse};
 
-use super::calibration::Calibration;
-use super::colour::{ColourBins, Histogram, is_chromatic, log_ratios};
 use super::settings::RegionSettings;
 use super::status::LostChain;
-use super::window::WorkingWindow;
+use crate::appearance::calibration::Calibration;
+use crate::appearance::colour::{ColourBins, Histogram, is_chromatic, log_ratios};
+use crate::appearance::window::WorkingWindow;
 use crate::config::TrackerConfig;
 use crate::frame::Frame;
 use crate::space::STATE_SLOTS;

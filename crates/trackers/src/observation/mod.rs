@@ -1,30 +1,38 @@
-//! The observation models a tracker can multiply together, and their evaluation on one frame.
+//! The observation terms a tracker adds together, and their evaluation on one frame.
 //!
-//! The likelihood of a particle is a sum of log terms, each evaluated by the crate that
-//! implements its equation (docs/MODELS.md):
+//! Every term is an [`ObservationTerm`]: it adds its log-likelihood of each particle to the
+//! particle's log weight, so the weight is their product (Odobez Eq. 18, 20). One file per term,
+//! each with the equation it implements (docs/MODELS.md):
 //!
-//! - Odobez's shape likelihood p_sh (Eq. 19), `contour_obs::OdobezLikelihood`;
-//! - the implicit motion likelihood p_c2 = exp(−λ_c d_c) (Eq. 22–23), d_c = 1 − ρ the NCC distance
-//!   between the patch of c_k in z_k and the patch of c_{k−1} in z_{k−1},
+//! - [`shape`]: Odobez's shape likelihood p_sh (Eq. 19), `contour_obs::OdobezLikelihood`;
+//! - [`clutter`]: Wu's Poisson-clutter likelihood with the particle's λ and γ (Wu Eq. 1–6,
+//!   11–12) in the occlusion form [`LikelihoodSettings::occlusion_form`], `contour_obs::WuTerm`;
+//! - [`implicit_motion`]: Odobez's implicit motion likelihood p_c2 = exp(−λ_c d_c) (Eq. 22–23),
 //!   [`motion_est::ImplicitMotionTerm`];
-//! - the motion consistency p_c1 = N(α̂_k; α_k, Λ̂_k) (Eq. 21), which cancels against Odobez's
-//!   motion proposal (Eq. 24) but can be used with any proposal; here, since it reads the
-//!   particle's cluster;
-//! - Wu's Poisson-clutter likelihood with the particle's λ and γ (Wu Eq. 1–6, 11–12) in the
-//!   occlusion form chosen by [`LikelihoodSettings::occlusion_form`], [`contour_obs::WuTerm`].
+//! - [`motion_consistency`]: Odobez's motion consistency p_c1 = N(α̂_k; α_k, Λ̂_k) (Eq. 21);
+//! - [`colour_contrast`], [`template`], [`contour_contrast`]: the appearance terms
+//!   ([`crate::appearance`]).
+//!
+//! A term of your own implements [`ObservationTerm`] and joins a tracker through
+//! [`crate::build_with_terms`] (`crates/trackers/examples/custom_term.rs`).
+
+pub mod clutter;
+pub mod colour_contrast;
+pub mod contour_contrast;
+pub mod implicit_motion;
+pub mod motion_consistency;
+pub mod shape;
+pub mod template;
 
 pub use contour_obs::ReferenceLines;
-use contour_obs::{
-    MeasurementLines, OcclusionForm, OdobezLikelihood, OdobezSettings, Template, WuSettings,
-    WuTerm, WuTermWorkspace,
-};
+use contour_obs::{OcclusionForm, OdobezSettings, Template, WuSettings};
 pub use motion_est::ImplicitMotionSettings;
-use motion_est::ImplicitMotionTerm;
 use serde::{Deserialize, Serialize};
 use vision_core::GreyImage;
 
+use crate::appearance::{Appearance, AppearanceSettings};
 use crate::particle::Particle;
-use crate::proposal::{ClusterMotion, log_motion_consistency};
+use crate::proposal::ClusterMotion;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
 
@@ -80,18 +88,18 @@ impl Default for LikelihoodSettings {
 }
 
 impl LikelihoodSettings {
-    /// Checks every term, that at least one looks at the image, and that the settings of Wu's
-    /// likelihood other than their defaults (line fraction, occlusion form) come with it.
+    /// Whether no term that looks at the image is on (a tracker then needs its appearance
+    /// terms, [`crate::TrackerConfig::appearance`]).
+    pub fn is_empty(&self) -> bool {
+        self.shape.is_none() && self.implicit_motion.is_none() && self.clutter.is_none()
+    }
+
+    /// Checks every term, and that the settings of Wu's likelihood other than their defaults
+    /// (line fraction, occlusion form) come with it.
     ///
     /// # Errors
     /// [`Error::InvalidSetting`], or the error of the crate that owns the term's settings.
     pub fn validate(&self) -> Result<()> {
-        if self.shape.is_none() && self.implicit_motion.is_none() && self.clutter.is_none() {
-            return Err(Error::InvalidSetting {
-                name: "likelihood",
-                reason: "at least one of shape, implicit_motion or clutter is needed".into(),
-            });
-        }
         if self.clutter.is_none() && self.clutter_line_fraction != 1.0 {
             return Err(Error::InvalidSetting {
                 name: "likelihood.clutter_line_fraction",
@@ -125,74 +133,144 @@ impl LikelihoodSettings {
     }
 }
 
-/// The built likelihood terms (templates sampled, grids laid out), and a fresh set of their
-/// workspaces that every batch copies.
-#[derive(Debug, Clone)]
+/// One factor of the likelihood p(z_k | x_k): a log-likelihood per particle, added to the
+/// particle's log weight.
+pub trait ObservationTerm: std::fmt::Debug + Send + Sync {
+    /// The term's name, for messages and docs (`"odobez shape (Eq. 19)"`).
+    fn name(&self) -> &'static str;
+
+    /// Adds log p_term(z_k | `particles[i]`) to `out[i]` for every particle: element-wise (the
+    /// engine may call it on any chunk of the set, from several threads), −∞ for a particle the
+    /// term cannot score (a pose that is not finite), never NaN or +∞.
+    fn add_log_likelihoods(
+        &self,
+        frame: &FrameContext<'_>,
+        particles: &[Particle],
+        out: &mut [f64],
+    );
+}
+
+/// What the terms read of one frame.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameContext<'a> {
+    pub(crate) space: ShapeSpace,
+    pub(crate) current: GreyImage<'a>,
+    pub(crate) previous: GreyImage<'a>,
+    pub(crate) clusters: &'a [ClusterMotion],
+    pub(crate) reference: &'a ReferenceLines,
+    pub(crate) appearance: Option<&'a Appearance>,
+}
+
+impl<'a> FrameContext<'a> {
+    /// The current frame z_k, grey (in the tracker's working pixels).
+    pub fn current(&self) -> GreyImage<'a> {
+        self.current
+    }
+
+    /// The previous frame z_{k−1}, grey.
+    pub fn previous(&self) -> GreyImage<'a> {
+        self.previous
+    }
+
+    /// The shape space of the particles.
+    pub fn space(&self) -> ShapeSpace {
+        self.space
+    }
+
+    /// The contour of a particle as an ellipse (`None` when its pose is not finite).
+    pub fn ellipse(&self, p: &Particle) -> Option<vision_core::Ellipse> {
+        self.space.pose(&p.now).to_ellipse()
+    }
+}
+
+/// The terms a configuration enables, in a fixed order (shape, clutter, implicit motion, motion
+/// consistency, colour contrast, template, contour contrast), then any of the user's.
+#[derive(Debug, Default)]
 pub struct LikelihoodModel {
-    space: ShapeSpace,
-    shape: Option<OdobezLikelihood>,
-    implicit: Option<ImplicitMotionTerm>,
-    motion_consistency: bool,
-    clutter: Option<WuTerm>,
-    scratch: Scratch,
+    terms: Vec<Box<dyn ObservationTerm>>,
+    /// Wu's term again, for the reference lines of the ratio occlusion form.
+    reference: Option<clutter::ClutterTerm>,
 }
 
 impl LikelihoodModel {
-    /// Builds the terms for the unit-circle template, and their workspaces.
+    /// Builds the terms of `settings` and of `appearance` for the unit-circle template.
     ///
     /// # Errors
     /// Invalid settings, or a workspace that cannot be built: the error is the model's, never
     /// a term silently missing from the particles' likelihood.
-    pub fn new(space: ShapeSpace, settings: &LikelihoodSettings) -> Result<Self> {
+    pub fn new(
+        space: ShapeSpace,
+        settings: &LikelihoodSettings,
+        appearance: Option<&AppearanceSettings>,
+    ) -> Result<Self> {
         settings.validate()?;
         let template = Template::UnitCircle;
-        let shape = settings
-            .shape
-            .map(|s| OdobezLikelihood::new(s, &template))
-            .transpose()?;
-        let implicit = settings
-            .implicit_motion
-            .map(ImplicitMotionTerm::new)
-            .transpose()?;
-        let clutter = settings
+        let mut terms: Vec<Box<dyn ObservationTerm>> = Vec::new();
+        if let Some(s) = settings.shape {
+            terms.push(Box::new(shape::ShapeTerm::new(s, &template)?));
+        }
+        let reference = settings
             .clutter
             .map(|w| {
-                let fraction = settings.clutter_line_fraction;
-                WuTerm::new(w, settings.occlusion_form, fraction, &template)
+                let (form, fraction) = (settings.occlusion_form, settings.clutter_line_fraction);
+                clutter::ClutterTerm::new(w, form, fraction, &template)
             })
             .transpose()?;
-        let patch = implicit.as_ref().map_or(0, ImplicitMotionTerm::patch_len);
-        let scratch = Scratch {
-            shape_lines: shape.as_ref().map(|s| s.workspace()).transpose()?,
-            clutter: clutter.as_ref().map(WuTerm::workspace).transpose()?,
-            patch_now: vec![0.0; patch],
-            patch_prev: vec![0.0; patch],
-        };
-        Ok(Self {
-            space,
-            shape,
-            implicit,
-            motion_consistency: settings.motion_consistency,
-            clutter,
-            scratch,
-        })
+        if let Some(term) = &reference {
+            terms.push(Box::new(term.clone()));
+        }
+        if let Some(m) = settings.implicit_motion {
+            terms.push(Box::new(implicit_motion::ImplicitMotion::new(m)?));
+        }
+        if settings.motion_consistency {
+            terms.push(Box::new(motion_consistency::MotionConsistency));
+        }
+        if let Some(a) = appearance {
+            if a.colour_weight > 0.0 {
+                terms.push(Box::new(colour_contrast::ColourContrast {
+                    weight: a.colour_weight,
+                }));
+            }
+            if a.template_weight > 0.0 {
+                terms.push(Box::new(template::TemplateMatch {
+                    weight: a.template_weight,
+                }));
+            }
+            if a.contour_weight > 0.0 {
+                terms.push(Box::new(contour_contrast::ContourContrast {
+                    weight: a.contour_weight,
+                }));
+            }
+        }
+        let _ = space;
+        Ok(Self { terms, reference })
+    }
+
+    /// Adds a term (a user's own, see [`crate::build_with_terms`]) after the configured ones.
+    pub fn push(&mut self, term: Box<dyn ObservationTerm>) {
+        self.terms.push(term);
+    }
+
+    /// The terms, in the order they are added.
+    pub fn terms(&self) -> &[Box<dyn ObservationTerm>] {
+        &self.terms
     }
 
     /// The edge counts and observed lengths of the lines of state `x` on `image` into `out`
     /// (cleared first; left empty unless the occlusion form reads them,
-    /// [`OcclusionForm::needs_reference`]): the reference lines of
-    /// [`FrameObservation::reference`].
+    /// [`OcclusionForm::needs_reference`]): the reference lines of [`FrameContext`].
     ///
     /// # Errors
     /// A non-finite state.
     pub fn reference_counts(
         &self,
+        space: ShapeSpace,
         image: &GreyImage<'_>,
         x: &crate::space::StateVector,
         out: &mut ReferenceLines,
     ) -> Result<()> {
-        match &self.clutter {
-            Some(wu) => Ok(wu.reference_lines(image, &self.space.pose(x), out)?),
+        match &self.reference {
+            Some(wu) => wu.reference_lines(image, &space.pose(x), out),
             None => {
                 out.clear();
                 Ok(())
@@ -201,95 +279,29 @@ impl LikelihoodModel {
     }
 }
 
-/// Per-thread scratch buffers of the likelihood terms: a copy of [`LikelihoodModel`]'s fresh
-/// set, with a workspace exactly for each term the model has.
-#[derive(Debug, Clone)]
-struct Scratch {
-    shape_lines: Option<MeasurementLines>,
-    clutter: Option<WuTermWorkspace>,
-    patch_now: Vec<f32>,
-    patch_prev: Vec<f32>,
-}
-
-/// The likelihood of one frame, ready for the particle filter.
+/// The likelihood of one frame, ready for the particle filter: the sum of the model's terms.
 #[derive(Debug, Clone, Copy)]
 pub struct FrameObservation<'a> {
     /// The terms.
     pub model: &'a LikelihoodModel,
-    /// The current frame z_k.
-    pub current: GreyImage<'a>,
-    /// The previous frame z_{k−1} (for p_c2).
-    pub previous: GreyImage<'a>,
-    /// Cluster motions (for p_c1).
-    pub clusters: &'a [ClusterMotion],
-    /// The lines at the tracker's last estimate on the current frame (read by the occlusion
-    /// forms that need them, [`OcclusionForm::needs_reference`]; empty otherwise).
-    pub reference: &'a ReferenceLines,
-}
-
-impl FrameObservation<'_> {
-    fn scratch(&self) -> Scratch {
-        self.model.scratch.clone()
-    }
-
-    /// The log-likelihood of one particle: the sum of the log terms the model enables (Odobez
-    /// Eq. 18, 20); −∞ when a term cannot be computed for it (a pose that is not finite), so
-    /// that such a particle simply dies.
-    fn evaluate(&self, p: &Particle, scratch: &mut Scratch) -> f64 {
-        let m = self.model;
-        let pose = m.space.pose(&p.now);
-        let mut total = 0.0;
-        // Odobez's shape likelihood p_sh (Eq. 19), by contour-obs.
-        if let (Some(shape), Some(ws)) = (&m.shape, scratch.shape_lines.as_mut()) {
-            match shape.log_likelihood(ws, &self.current, &pose) {
-                Ok(v) => total += v,
-                Err(_) => return f64::NEG_INFINITY,
-            }
-        }
-        // Wu's contour likelihood in its occlusion form (Wu Eq. 1–6, 11–12), by contour-obs.
-        if let (Some(wu), Some(ws)) = (&m.clutter, scratch.clutter.as_mut()) {
-            let (lambda, gamma) = (p.clutter.lambda, p.gamma());
-            match wu.log_likelihood(ws, &self.current, &pose, lambda, gamma, self.reference) {
-                Ok(v) => total += v,
-                Err(_) => return f64::NEG_INFINITY,
-            }
-        }
-        // Odobez's implicit motion likelihood p_c2 (Eq. 22–23), by motion-est.
-        if let Some(implicit) = &m.implicit {
-            let pose_prev = m.space.pose(&p.prev);
-            let (now_view, prev_view) = (self.current, self.previous);
-            match implicit.log_likelihood(
-                now_view,
-                prev_view,
-                (&pose.a, [pose.t.x, pose.t.y]),
-                (&pose_prev.a, [pose_prev.t.x, pose_prev.t.y]),
-                &mut scratch.patch_now,
-                &mut scratch.patch_prev,
-            ) {
-                Ok(v) => total += v,
-                Err(_) => return f64::NEG_INFINITY,
-            }
-        }
-        // Odobez's motion consistency p_c1 (Eq. 21), here: it reads the particle's cluster.
-        if m.motion_consistency {
-            total += log_motion_consistency(m.space, self.clusters, p);
-        }
-        total
-    }
+    /// What they read of the frame.
+    pub frame: FrameContext<'a>,
 }
 
 impl smc_core::Observation for FrameObservation<'_> {
     type State = Particle;
 
     fn log_likelihood(&self, state: &Particle) -> f64 {
-        self.evaluate(state, &mut self.scratch())
+        let mut out = [0.0];
+        self.log_likelihood_batch(std::slice::from_ref(state), &mut out);
+        out[0]
     }
 
-    /// One set of scratch buffers per batch (per chunk on the parallel path), none per particle.
+    /// Every term over the batch in turn, each with one workspace per batch.
     fn log_likelihood_batch(&self, states: &[Particle], out: &mut [f64]) {
-        let mut scratch = self.scratch();
-        for (s, o) in states.iter().zip(out.iter_mut()) {
-            *o = self.evaluate(s, &mut scratch);
+        out.fill(0.0);
+        for term in &self.model.terms {
+            term.add_log_likelihoods(&self.frame, states, out);
         }
     }
 }

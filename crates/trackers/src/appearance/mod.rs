@@ -1,0 +1,380 @@
+//! The target's appearance: its colour against its background's and its grey template, read in
+//! a window around the target at a working scale and learnt from the frames where the target is
+//! held. Three observation terms read it, each a log-likelihood added to the particle's weight
+//! (Odobez's object likelihood p_o, Eq. 18, "shape or colour"):
+//!
+//! - **colour contrast** ([`window::WorkingWindow::contrast`]): each pixel's log-ratio
+//!   ln(p_target / p_background) of its HSV bin (Pérez et al. 2002's bins; grey levels for grey
+//!   footage) summed inside the ellipse, as the pixel-wise posteriors of Bibby & Reid 2008, less
+//!   the mean positive log-ratio in the ring just outside it;
+//! - **template**: the normalised cross-correlation ρ (Odobez Eq. 23) of the grey patch under the
+//!   hypothesis with the target's template (the first frame's and the learnt one in equal parts);
+//! - **contour contrast** ([`window::WorkingWindow::edge_strength`]): the grey contrast across
+//!   the ellipse along its normals (Birchfield 1998's perimeter gradient), normalised.
+//!
+//! A two-state lock chain ([`crate::monitor::lock`]) reads the estimate's colour similarity to
+//! the first frame's target: learning stops while the target is believed lost.
+
+pub(crate) mod calibration;
+pub(crate) mod colour;
+pub(crate) mod window;
+
+use serde::{Deserialize, Serialize};
+use vision_core::Ellipse;
+
+use crate::frame::Frame;
+use crate::monitor::lock::LockChain;
+use crate::{Error, Result};
+use colour::{ColourBins, Histogram, is_chromatic, log_ratios};
+use window::WorkingWindow;
+
+/// Most working pixels read from one frame (a whole frame while the target is lost is read
+/// coarser to stay under it).
+const MAX_WINDOW_PIXELS: f64 = 40_000.0;
+/// Largest background similarity used to rescale the lock chain's observation (a target that
+/// looks like its background cannot be told from it by colour; the rescaling then saturates).
+const MAX_BACKGROUND_SIMILARITY: f64 = 0.9;
+
+/// Settings of the appearance model and its three terms. Every field has a default, so a
+/// configuration file may give only what it changes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AppearanceSettings {
+    /// Geometric-mean side of the target in working pixels: the window is read at the scale
+    /// that maps the target to this size (never above the frame's resolution), so the terms cost
+    /// the same for any target size. Default 32.
+    pub working_size: f64,
+    /// Half-size of the window around the last estimate, in its half-axes (default 3).
+    pub search: f64,
+    /// Hue and saturation bins of the colour histogram (each; default 8).
+    pub hs_bins: usize,
+    /// Value bins for unsaturated or dark pixels (default 8; grey frames use twice as many grey
+    /// levels).
+    pub value_bins: usize,
+    /// Outer ellipse of the ring the colour contrast compares the inside with, in half-axes of
+    /// the hypothesis (default 1.5).
+    pub contrast_ring: f64,
+    /// The background model's ring around the estimate, inner and outer ellipse in half-axes
+    /// (default 1.25 to 2: a margin the target's own boundary pixels do not reach).
+    pub background_ring: [f64; 2],
+    /// Weight of the colour contrast, nats per unit (default 12).
+    pub colour_weight: f64,
+    /// Weight of the template term, nats per unit of ρ (default 40).
+    pub template_weight: f64,
+    /// Weight of the contour contrast, nats per unit (default 1).
+    pub contour_weight: f64,
+    /// Samples across the template's disc, a grid of this many squared clipped to the disc
+    /// (default 12).
+    pub template_grid: usize,
+    /// Share of the learnt colours and template in the models the terms read; the rest is the
+    /// first frame's, so that learning follows slow changes without drifting (default 0.5).
+    pub learnt_share: f64,
+    /// Learning rate of the target's colour from locked frames (default 0.02).
+    pub target_rate: f64,
+    /// Learning rate of the background's colour from locked frames (default 0.2).
+    pub background_rate: f64,
+    /// Learning rate of the template from locked frames (default 0.05).
+    pub template_rate: f64,
+    /// Probability that the lock chain keeps its state from one frame to the next (default
+    /// 0.95).
+    pub lock_persistence: f64,
+    /// Most centres the detection of [`Appearance::detect`] scores in one frame (default 1024):
+    /// its cost bound while the whole frame is searched.
+    pub max_detection_centres: usize,
+}
+
+impl Default for AppearanceSettings {
+    fn default() -> Self {
+        Self {
+            working_size: 32.0,
+            search: 3.0,
+            hs_bins: 8,
+            value_bins: 8,
+            contrast_ring: 1.5,
+            background_ring: [1.25, 2.0],
+            colour_weight: 12.0,
+            template_weight: 40.0,
+            contour_weight: 1.0,
+            template_grid: 12,
+            learnt_share: 0.5,
+            target_rate: 0.02,
+            background_rate: 0.2,
+            template_rate: 0.05,
+            lock_persistence: 0.95,
+            max_detection_centres: 1024,
+        }
+    }
+}
+
+impl AppearanceSettings {
+    /// Checks what the ranges of [`crate::ranges`] cannot say.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] for a background ring whose inner ellipse is not inside its
+    /// outer one, or all three weights zero.
+    pub fn validate(&self) -> Result<()> {
+        let [inner, outer] = self.background_ring;
+        if !(inner >= 1.0 && inner < outer) {
+            return Err(Error::InvalidSetting {
+                name: "appearance.background_ring",
+                reason: format!("[{inner}, {outer}] must have 1 <= inner < outer"),
+            });
+        }
+        if !(self.colour_weight + self.template_weight + self.contour_weight > 0.0) {
+            return Err(Error::InvalidSetting {
+                name: "appearance.colour_weight",
+                reason: "the colour, template and contour weights cannot all be 0".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The appearance of one track: models, the current frame's window, the lock chain.
+#[derive(Debug, Clone)]
+pub struct Appearance {
+    settings: AppearanceSettings,
+    bins: ColourBins,
+    window: WorkingWindow,
+    ratios: Vec<f32>,
+    initial_target: Histogram,
+    target: Histogram,
+    initial_background: Histogram,
+    background: Histogram,
+    /// ρ of the first frame's background ring to the target (the lock chain's zero).
+    background_similarity: f64,
+    grid: Vec<[f64; 2]>,
+    initial_template: Vec<f32>,
+    template: Vec<f32>,
+    /// The template the terms read this frame.
+    reference_template: Vec<f32>,
+    /// The last estimate's area in working pixels (the colour contrast's unit).
+    reference_area: f64,
+    lock: LockChain,
+}
+
+impl Appearance {
+    /// The appearance of the target `e` on its first frame.
+    ///
+    /// # Errors
+    /// An ellipse that covers no pixel or leaves no background around it.
+    pub fn start(settings: AppearanceSettings, frame: &Frame<'_>, e: &Ellipse) -> Result<Self> {
+        let bins = if frame
+            .colour()
+            .is_some_and(|(pixels, _)| is_chromatic(pixels))
+        {
+            ColourBins::colour(settings.hs_bins, settings.value_bins)
+        } else {
+            ColourBins::grey(2 * settings.value_bins)
+        };
+        let mut window = WorkingWindow::default();
+        read_window(&settings, &mut window, frame, &bins, e, false);
+        let (inside, ring) = counts(&settings, &window, bins.len(), e);
+        let (Some(target), Some(background)) = (inside, ring) else {
+            return Err(Error::InvalidSetting {
+                name: "initial ellipse",
+                reason: format!(
+                    "{} covers no pixel of the frame or leaves no background around it in the \
+                     frame; start from a smaller box inside the frame",
+                    crate::tracker::describe(e)
+                ),
+            });
+        };
+        let grid = motion_est::unit_disc_grid(settings.template_grid);
+        let mut template = vec![0.0; grid.len()];
+        window.patch(e, &grid, &mut template)?;
+        let mut ratios = Vec::new();
+        log_ratios(&target, &background, &mut ratios);
+        window.integrate(&ratios);
+        Ok(Self {
+            background_similarity: target
+                .bhattacharyya(&background)
+                .clamp(0.0, MAX_BACKGROUND_SIMILARITY),
+            reference_area: window.area(e),
+            reference_template: template.clone(),
+            initial_template: template.clone(),
+            template,
+            grid,
+            initial_target: target.clone(),
+            target,
+            initial_background: background.clone(),
+            background,
+            lock: LockChain::new(settings.lock_persistence)?,
+            settings,
+            bins,
+            window,
+            ratios,
+        })
+    }
+
+    /// Reads the window around `estimate` (the whole frame while the target is believed lost)
+    /// and prepares what the terms read: the log-ratios of the blended models, the reference
+    /// area and the reference template.
+    pub fn read(&mut self, frame: &Frame<'_>, estimate: &Ellipse) {
+        let s = self.settings;
+        let whole = self.lock.p_lost() > 0.5;
+        read_window(&s, &mut self.window, frame, &self.bins, estimate, whole);
+        let mut target = self.initial_target.clone();
+        target.blend(&self.target, s.learnt_share);
+        let mut background = self.initial_background.clone();
+        background.blend(&self.background, s.learnt_share);
+        log_ratios(&target, &background, &mut self.ratios);
+        self.window.integrate(&self.ratios);
+        self.reference_area = self.window.area(estimate);
+        let share = s.learnt_share;
+        self.reference_template.clear();
+        self.reference_template.extend(
+            self.initial_template
+                .iter()
+                .zip(&self.template)
+                .map(|(a, b)| ((1.0 - share) * f64::from(*a) + share * f64::from(*b)) as f32),
+        );
+    }
+
+    /// A buffer for [`Appearance::template_similarity`]'s samples.
+    pub fn samples(&self) -> Vec<f32> {
+        vec![0.0; self.grid.len()]
+    }
+
+    /// The colour contrast of the hypothesis `e` on the window last read, in nats per pixel of
+    /// the last estimate's area ([`window::WorkingWindow::contrast`]).
+    pub fn colour_contrast(&self, e: &Ellipse) -> f64 {
+        self.window
+            .contrast(e, self.settings.contrast_ring, self.reference_area)
+    }
+
+    /// The template's similarity ρ ∈ [−1, 1] (Odobez Eq. 23's normalised cross-correlation)
+    /// between the grey patch under `e` and the target's template; `None` when the patch cannot
+    /// be sampled or holds too few valid samples. `samples` is a buffer from
+    /// [`Appearance::samples`].
+    pub fn template_similarity(&self, e: &Ellipse, samples: &mut [f32]) -> Option<f64> {
+        let ncc = motion_est::NccSettings::default();
+        self.window.patch(e, &self.grid, samples).ok()?;
+        let d = motion_est::ncc_distance(&self.reference_template, samples, &ncc).ok()?;
+        Some(1.0 - d)
+    }
+
+    /// The grey contrast across the contour of `e`, normalised
+    /// ([`window::WorkingWindow::edge_strength`]).
+    pub fn contour_contrast(&self, e: &Ellipse) -> f64 {
+        self.window.edge_strength(e)
+    }
+
+    /// The centre of the best appearance score (colour contrast and template, with their
+    /// weights) of an ellipse of half-axes `axes` over a grid of centres spanning the window
+    /// last read, spaced a quarter of the target's geometric-mean half-axis apart (coarser when
+    /// that would exceed [`AppearanceSettings::max_detection_centres`]); `None` for an empty
+    /// grid. Where the reacquisition component draws while the target is not held.
+    pub fn detect(&self, axes: (f64, f64)) -> Option<[f64; 2]> {
+        let s = &self.settings;
+        let [x0, y0, x1, y1] = self.window.bounds();
+        let half = (axes.0 * axes.1).sqrt();
+        let cells = ((x1 - x0) * (y1 - y0)).max(0.0);
+        let stride = (0.25 * half).max((cells / s.max_detection_centres as f64).sqrt());
+        if !(stride > 0.0 && stride.is_finite()) {
+            return None;
+        }
+        let mut samples = self.samples();
+        let mut best: Option<([f64; 2], f64)> = None;
+        let mut y = y0 + 0.5 * stride;
+        while y < y1 {
+            let mut x = x0 + 0.5 * stride;
+            while x < x1 {
+                let e = Ellipse::new(x, y, axes.0, axes.1, 0.0);
+                let mut score = s.colour_weight * self.colour_contrast(&e);
+                if s.template_weight > 0.0 {
+                    score += self
+                        .template_similarity(&e, &mut samples)
+                        .map_or(f64::NEG_INFINITY, |r| s.template_weight * r);
+                }
+                if score.is_finite() && best.is_none_or(|(_, b)| score > b) {
+                    best = Some(([x, y], score));
+                }
+                x += stride;
+            }
+            y += stride;
+        }
+        best.map(|(c, _)| c)
+    }
+
+    /// After the estimate `e` of this frame: the lock chain reads its colour similarity to the
+    /// first frame's target, and while the target is held the models learn from it.
+    ///
+    /// # Errors
+    /// A non-finite estimate.
+    pub fn observe(&mut self, e: &Ellipse) -> Result<()> {
+        let s = self.settings;
+        let (inside, ring) = counts(&s, &self.window, self.bins.len(), e);
+        let rho = inside
+            .as_ref()
+            .map_or(0.0, |h| h.bhattacharyya(&self.initial_target));
+        let bg = self.background_similarity;
+        self.lock.observe((rho - bg) / (1.0 - bg));
+        let p_lost = self.lock.p_lost();
+        if p_lost >= 0.5 {
+            return Ok(());
+        }
+        let hold = 1.0 - 2.0 * p_lost;
+        if let Some(ring) = &ring {
+            self.background.blend(ring, s.background_rate);
+        }
+        if let Some(inside) = &inside {
+            self.target.blend(inside, s.target_rate * hold);
+        }
+        if s.template_rate > 0.0 {
+            let mut samples = self.samples();
+            self.window.patch(e, &self.grid, &mut samples)?;
+            let rate = (s.template_rate * hold) as f32;
+            for (t, v) in self.template.iter_mut().zip(&samples) {
+                if v.is_finite() {
+                    *t = (1.0 - rate) * *t + rate * v;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The lock chain's status: locked or lost, P(lost) as γ̂.
+    pub fn status(&self) -> dbn_switch::StatusEstimate {
+        self.lock.estimate()
+    }
+}
+
+/// Reads the window of `frame` around `e` (the whole frame when `whole`) at the working scale.
+fn read_window(
+    s: &AppearanceSettings,
+    window: &mut WorkingWindow,
+    frame: &Frame<'_>,
+    bins: &ColourBins,
+    e: &Ellipse,
+    whole: bool,
+) {
+    let (fw, fh) = (frame.width() as f64, frame.height() as f64);
+    let side = 2.0 * (e.a * e.b).abs().sqrt();
+    let rect = if whole {
+        [0.0, 0.0, fw, fh]
+    } else {
+        let (hx, hy) = (s.search * e.a.abs(), s.search * e.b.abs());
+        [e.cx - hx, e.cy - hy, e.cx + hx, e.cy + hy]
+    };
+    let area = (rect[2].min(fw) - rect[0].max(0.0)) * (rect[3].min(fh) - rect[1].max(0.0));
+    let step = (side / s.working_size)
+        .max(1.0)
+        .max((area.max(0.0) / MAX_WINDOW_PIXELS).sqrt());
+    window.read(frame, bins, rect, step);
+}
+
+/// The colour histograms inside `e` and of the background ring around it.
+fn counts(
+    s: &AppearanceSettings,
+    window: &WorkingWindow,
+    bins: usize,
+    e: &Ellipse,
+) -> (Option<Histogram>, Option<Histogram>) {
+    let ring = (s.background_ring[0], s.background_ring[1]);
+    let (inside, around) = window.target_and_ring_counts(bins, e, ring);
+    (
+        Histogram::from_counts(inside),
+        Histogram::from_counts(around),
+    )
+}

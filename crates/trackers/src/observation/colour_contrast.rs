@@ -1,0 +1,36 @@
+//! The colour contrast of the appearance model ([`crate::appearance`]): the target-against-
+//! background log-ratios summed inside the contour, less the target-like evidence just outside
+//! it ([`crate::appearance::window::WorkingWindow::contrast`]).
+
+use super::{FrameContext, ObservationTerm};
+use crate::particle::Particle;
+
+/// The colour contrast, `weight` nats per unit.
+#[derive(Debug, Clone, Copy)]
+pub struct ColourContrast {
+    /// Nats per unit of contrast.
+    pub weight: f64,
+}
+
+impl ObservationTerm for ColourContrast {
+    fn name(&self) -> &'static str {
+        "colour contrast"
+    }
+
+    fn add_log_likelihoods(
+        &self,
+        frame: &FrameContext<'_>,
+        particles: &[Particle],
+        out: &mut [f64],
+    ) {
+        let Some(appearance) = frame.appearance else {
+            return;
+        };
+        for (p, o) in particles.iter().zip(out) {
+            *o += match frame.ellipse(p) {
+                Some(e) => self.weight * appearance.colour_contrast(&e),
+                None => f64::NEG_INFINITY,
+            };
+        }
+    }
+}
