@@ -2,9 +2,9 @@
 //! β̂ with its class probabilities, the clutter density λ̂, the occlusion γ̂, the tracker status α̂
 //! with its probabilities, the effective sample size, and the IoU with the ground truth.
 //!
-//! What a figure shows follows the tracker ([`PlotOptions::of_tracker`]): the region tracker's
-//! γ̂ is P(lost), not an occlusion, so it has no γ̂ figure, and its status has no partial state,
-//! so P(partial) is not drawn. Where the truth is known ([`TruthAt`]: boxes of an OTB folder, or
+//! What a figure shows follows the tracker ([`PlotOptions::of_tracker`]): the lock chain of the
+//! appearance trackers (`head`) reports P(lost), not an occlusion, so it has no γ̂ figure, and its
+//! status has no partial state, so P(partial) is not drawn. Where the truth is known ([`TruthAt`]: boxes of an OTB folder, or
 //! every hidden value of the demo's synthetic scene), it is drawn beside the estimates.
 //!
 //! Each figure is rendered to a `String` with plotters' SVG backend, so that the report can inline
@@ -56,8 +56,8 @@ pub struct TruthAt {
 /// What the figures draw besides the records.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlotOptions {
-    /// Whether γ̂ is an occlusion estimate to plot (not for the region tracker, whose γ̂ is
-    /// P(lost), already drawn as the status probability).
+    /// Whether γ̂ is an occlusion estimate to plot (not for the lock chain, whose γ̂ is P(lost),
+    /// already drawn as the status probability).
     pub occlusion: bool,
     /// The statuses the tracker has, in [`TrackStatus::ALL`] order: their probabilities are
     /// drawn, the others not.
@@ -77,13 +77,13 @@ impl Default for PlotOptions {
 }
 
 impl PlotOptions {
-    /// The options for the tracker `config` builds, without truth: the region tracker has no
-    /// occlusion figure and no partial state.
+    /// The options for the tracker `config` builds, without truth: a tracker whose status has
+    /// no partial state (the lock chain) has no occlusion figure.
     pub fn of_tracker(config: &trackers::TrackerConfig) -> Self {
-        let region = config.region.is_some();
+        let partial = config.has_partial_state();
         Self {
-            occlusion: !region,
-            statuses: [true, !region, true],
+            occlusion: partial,
+            statuses: [true, partial, true],
             truth: Vec::new(),
         }
     }
@@ -793,11 +793,11 @@ mod tests {
     }
 
     #[test]
-    fn the_region_trackers_p_lost_is_no_occlusion_and_it_has_no_partial_state() {
+    fn the_lock_chains_p_lost_is_no_occlusion_and_it_has_no_partial_state() {
         let head = PlotOptions::of_tracker(&trackers::Preset::Head.config(50, 1));
         let mut rs = records(false);
         for r in &mut rs {
-            // What the region tracker records: γ̂ = P(lost) and P(partial) = 0.
+            // What the lock chain records: γ̂ = P(lost) and P(partial) = 0.
             r.gamma_hat = Some(0.1);
             r.alpha_hat = Some(TrackStatus::Locked);
             r.alpha_probs = vec![0.9, 0.0, 0.1];

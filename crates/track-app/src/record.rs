@@ -89,20 +89,14 @@ pub struct CsvColumns {
 impl CsvColumns {
     /// The columns of the tracker `config` builds: β probabilities for the contour trackers with
     /// switching clutter (one per class of its clutter model), α probabilities for the trackers
-    /// with the status HMM and for the region tracker (its lost/locked chain).
+    /// that report them (the status HMM, the appearance terms' lock chain).
     pub fn of_tracker(config: &trackers::TrackerConfig) -> Self {
-        if config.region.is_some() {
-            return Self {
-                beta_classes: 0,
-                status: true,
-            };
-        }
         Self {
             beta_classes: match &config.clutter {
                 trackers::ClutterMode::Switching(c) => c.lambda_mean.len(),
                 trackers::ClutterMode::Fixed { .. } => 0,
             },
-            status: matches!(config.occlusion, trackers::OcclusionMode::Status(_)),
+            status: config.reports_status_probabilities(),
         }
     }
 

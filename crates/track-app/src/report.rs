@@ -180,13 +180,13 @@ pub fn standard_notes(s: &Summary) -> Vec<String> {
     notes
 }
 
-/// What the effective sample size (ESS) plot shows, for a contour tracker or the region tracker
-/// (`region`).
-pub fn ess_note(region: bool) -> String {
-    if region {
-        "ESS: the effective sample size 1/Σw² of the weights after weighting. The region \
-         tracker tempers its weights (raises them to the smallest power ≤ 1 that keeps the ESS \
-         at its floor), so the ESS stays at or above that floor by design."
+/// What the effective sample size (ESS) plot shows, for a tracker whose likelihood is tempered
+/// or not.
+pub fn ess_note(tempered: bool) -> String {
+    if tempered {
+        "ESS: the effective sample size 1/Σw² of the weights after weighting. The tracker \
+         tempers its likelihood (raises it to the largest power ≤ 1 that keeps the ESS at its \
+         floor), so the ESS stays at or above that floor by design."
             .to_owned()
     } else {
         "ESS: the effective sample size 1/Σw² of the normalised weights just after weighting, \

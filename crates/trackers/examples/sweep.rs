@@ -289,7 +289,6 @@ fn override_reacquisition(c: &mut TrackerConfig) {
     if let Some(r) = c.reacquisition.as_mut() {
         for (k, slot) in [
             ("RQLOCK", &mut r.lock_gamma),
-            ("RQSHAPE", &mut r.shape_tolerance),
             ("RQRATE", &mut r.share_rate),
             ("RQMAX", &mut r.max_share),
             ("RQSPREAD", &mut r.spread),

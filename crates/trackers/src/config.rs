@@ -9,7 +9,6 @@ use crate::appearance::AppearanceSettings;
 use crate::dynamics::{DynamicsSettings, NoiseKind};
 use crate::observation::{ImplicitMotionSettings, LikelihoodSettings};
 use crate::reacquire::ReacquisitionSettings;
-use crate::region::RegionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
 use contour_obs::OcclusionForm;
@@ -159,11 +158,6 @@ pub struct TrackerConfig {
     /// development set, it helped some presets and hurt others (docs/RESULTS.md, decision log).
     #[serde(default)]
     pub working_radius: Option<f64>,
-    /// The region tracker's settings ([`crate::region`]); `None` for the papers' contour
-    /// trackers. When present, [`crate::build`] makes a region tracker, which reads `name`,
-    /// `particles`, `seed` and these settings only.
-    #[serde(default)]
-    pub region: Option<RegionSettings>,
     /// The appearance model and its colour-contrast, template and contour-contrast terms
     /// ([`crate::appearance`]); `None` (every paper preset): off. With it, the lock chain on
     /// the estimate's colour reports the track's status unless Wu's status process does.
@@ -249,9 +243,6 @@ impl TrackerConfig {
         if let Some(r) = &self.reacquisition {
             r.validate()?;
         }
-        if let Some(r) = &self.region {
-            r.validate()?;
-        }
         self.filter.validate()?;
         self.motion.estimator.validate()?;
         if !(self.motion.clusters_per_particle.is_finite()
@@ -292,11 +283,29 @@ impl TrackerConfig {
         Ok(())
     }
 
+    /// Whether the tracker's status has a partially occluded state: Wu's α (the status HMM) or
+    /// γ̂'s ranges. The lock chain of a tracker with appearance terms and no occlusion process
+    /// says locked or lost only.
+    pub fn has_partial_state(&self) -> bool {
+        !(self.appearance.is_some() && self.occlusion == OcclusionMode::None)
+    }
+
+    /// Whether the tracker reports the probabilities of its status (Wu's status HMM, or the
+    /// lock chain of the appearance terms).
+    pub fn reports_status_probabilities(&self) -> bool {
+        matches!(self.occlusion, OcclusionMode::Status(_)) || self.appearance.is_some()
+    }
+
+    /// Whether the likelihood is tempered ([`FilterSettings::min_ess_fraction`]).
+    pub fn is_tempered(&self) -> bool {
+        self.filter.min_ess_fraction.is_some()
+    }
+
     /// Whether the tracker follows rotated contours: the affine shape space of Wu's trackers
-    /// (`w-*`). Odobez's space (`m1`, `m2`, `m3`, `full`) and the region tracker (`head`) track
+    /// (`w-*`). Odobez's space (`m1`, `m2`, `m3`, `full`, `head`) tracks
     /// axis-aligned ellipses.
     pub fn rotates(&self) -> bool {
-        self.region.is_none() && self.space == ShapeSpace::Affine
+        self.space == ShapeSpace::Affine
     }
 
     /// The ellipse `e` as this configuration's tracker starts from it, exactly; every tracker's
@@ -392,6 +401,15 @@ pub const OCCLUSION_ARC: bool = true;
 /// the contour shrinks onto the visible sliver instead. With 0.3, γ̂ rises while the target is
 /// hidden and falls after it on every seed `tests/tracking.rs` checks; the price is the zooming
 /// `distractor` scene, where a larger σ_γ lets γ explain the mismatch of a zooming target
+/// `head`'s ESS floor after weighting, as a fraction of N ([`FilterSettings::min_ess_fraction`]):
+/// the template scores the true face tens of nats above its surroundings, which untempered would
+/// leave one particle to resample from.
+pub const HEAD_MIN_ESS_FRACTION: f64 = 0.3;
+/// `head`'s working radius, pixels: the target is shrunk to a mean radius of 16 px (a side of 32,
+/// the appearance terms' template and window resolution), so its pixel-unit settings (3 px of
+/// translation noise) are a fixed share of its size and its cost does not grow with it.
+pub const HEAD_WORKING_RADIUS: f64 = 16.0;
+
 /// (docs/RESULTS.md, decision log).
 pub const W_OCC_SIGMA_GAMMA: f64 = 0.3;
 
@@ -460,7 +478,21 @@ impl TrackerConfig {
                 serde_json::from_str(text).map_err(|e| format!("invalid JSON: {e}"))
             }
         }
+        .map_err(|message| match replaced_field(&message) {
+            Some(replacement) => format!("{message}; {replacement}"),
+            None => message,
+        })
     }
+}
+
+/// What replaced a field of an earlier configuration file that an error names as unknown.
+fn replaced_field(message: &str) -> Option<&'static str> {
+    message.contains("unknown field `region`").then_some(
+        "`region` held the settings of the region tracker behind the old `head`, which is now \
+         a composition of the one particle engine: its colour, template and contour terms are \
+         `appearance`, its tempering `filter.min_ess_fraction`, its working scale \
+         `working_radius` (write a new file with `track config head`)",
+    )
 }
 
 /// The named trackers of both papers, and the combination neither has.
@@ -487,9 +519,9 @@ pub enum Preset {
     /// Odobez's motion proposal and implicit likelihood with Wu's switching clutter, occlusion and
     /// status processes.
     Full,
-    /// The recommended tracker for real footage: the region tracker ([`crate::region`]), colour
-    /// log-ratio and contour contrast at a working scale set by the target's size, tempered
-    /// weights, a lost/locked chain and reacquisition.
+    /// The recommended tracker for real footage: the appearance terms ([`crate::appearance`]:
+    /// colour contrast, template, contour contrast) with Odobez's Gaussian AR2 prior, at a
+    /// working scale set by the target's size, tempered, with the lock chain.
     Head,
 }
 
@@ -620,7 +652,6 @@ impl Preset {
             init_spread: default_init_spread(),
             working_radius: None,
             reacquisition: None,
-            region: None,
             appearance: None,
         };
         let wu = TrackerConfig {
@@ -704,7 +735,19 @@ impl Preset {
                 ..base
             },
             Preset::Head => TrackerConfig {
-                region: Some(RegionSettings::default()),
+                likelihood: LikelihoodSettings::default(),
+                appearance: Some(AppearanceSettings::default()),
+                filter: FilterSettings {
+                    min_ess_fraction: Some(HEAD_MIN_ESS_FRACTION),
+                    ..FilterSettings::default()
+                },
+                working_radius: Some(HEAD_WORKING_RADIUS),
+                // The lock chain alone says whether the target is held: a face that grows as it
+                // nears the camera is not lost.
+                reacquisition: Some(ReacquisitionSettings {
+                    shape_tolerance: None,
+                    ..ReacquisitionSettings::default()
+                }),
                 ..base
             },
         }

@@ -16,7 +16,7 @@
 //! | `w-occ` | Wu §5 | prior, {β, λ} HMM, γ walk (σ_γ 0.3), reacquisition | Wu Eq. 11–12, γ as one hidden arc |
 //! | `w-eval` | Wu §6.3 | prior, {β, λ} HMM, {α, γ} HMM, reacquisition | Wu Eq. 11–12, γ as one hidden arc |
 //! | `full` | neither | motion, Eq. 16, all hidden processes | Wu Eq. 11–12 · p_c2 · p_c1 · prior / q |
-//! | `head` | neither (recommended for real footage) | random walk, detection jumps | colour contrast · NCC template · contour contrast, tempered ([`region`]) |
+//! | `head` | neither (recommended for real footage) | Gaussian AR2 prior, at a working scale | colour contrast · template · contour contrast ([`appearance`]), tempered |
 //!
 //! # Example
 //! ```
@@ -68,7 +68,6 @@ mod particle;
 mod proposal;
 pub mod ranges;
 mod reacquire;
-pub mod region;
 pub mod smoothing;
 mod space;
 mod tracker;
@@ -87,7 +86,6 @@ pub use frame::{Frame, FrameBuf};
 pub use observation::{FrameContext, ImplicitMotionSettings, LikelihoodSettings, ObservationTerm};
 pub use particle::Particle;
 pub use reacquire::ReacquisitionSettings;
-pub use region::{RegionSettings, RegionTracker};
 pub use smc_core::smooth::SmootherSettings;
 pub use smoothing::{ChainCounts, SmoothedRun, SwitchingStatistics};
 pub use space::{STATE_SLOTS, ShapeSpace, StateVector};

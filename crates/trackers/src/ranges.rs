@@ -200,7 +200,7 @@ pub const SETTING_RANGES: &[SettingRange] = &[
     optional(positive("filter.min_ess_fraction", 1.0)),
     // reacquisition
     closed("reacquisition.lock_gamma", 0.0, 1.0),
-    positive("reacquisition.shape_tolerance", 10.0),
+    optional(positive("reacquisition.shape_tolerance", 10.0)),
     closed("reacquisition.rollback", 0.0, 1000.0),
     closed("reacquisition.share_rate", 0.0, 1.0),
     closed("reacquisition.max_share", 0.0, 1.0),
@@ -210,7 +210,6 @@ pub const SETTING_RANGES: &[SettingRange] = &[
     closed("reacquisition.velocity_gain", 0.0, 1.0),
     closed("reacquisition.shape_gain", 0.0, 1.0),
     // appearance
-    closed("appearance.working_size", 8.0, 256.0),
     closed("appearance.search", 1.0, 20.0),
     closed("appearance.hs_bins", 2.0, 32.0),
     closed("appearance.value_bins", 2.0, 64.0),
@@ -230,32 +229,6 @@ pub const SETTING_RANGES: &[SettingRange] = &[
         ..closed("appearance.lock_persistence", 0.5, 1.0)
     },
     closed("appearance.max_detection_centres", 1.0, 1e6),
-    // region
-    closed("region.working_size", 8.0, 256.0),
-    closed("region.search", 1.0, 20.0),
-    closed("region.hs_bins", 2.0, 32.0),
-    closed("region.value_bins", 2.0, 64.0),
-    closed("region.contrast_ring", 1.05, 4.0),
-    closed("region.colour_weight", 0.0, 1000.0),
-    closed("region.gradient_weight", 0.0, 1000.0),
-    closed("region.template_weight", 0.0, 1000.0),
-    closed("region.template_rate", 0.0, 1.0),
-    closed("region.min_ess_fraction", 0.0, 1.0),
-    closed("region.sigma_position", 0.0, 2.0),
-    closed("region.jump_probability", 0.0, 1.0),
-    closed("region.sigma_scale", 0.0, 2.0),
-    closed("region.scale_reversion", 0.0, 1.0),
-    closed("region.sigma_aspect", 0.0, 2.0),
-    closed("region.velocity_retention", 0.0, 1.0),
-    closed("region.target_rate", 0.0, 1.0),
-    closed("region.background_rate", 0.0, 1.0),
-    SettingRange {
-        low_inclusive: false,
-        high_inclusive: false,
-        ..closed("region.status_persistence", 0.5, 1.0)
-    },
-    closed("region.detection_share", 0.0, 1.0),
-    closed("region.reacquire_share", 0.0, 1.0),
 ];
 
 /// The entry for a concrete path (`a.b[1][2]`): its own entry, or the list's (`a.b`).
@@ -511,14 +484,14 @@ mod tests {
                 "{e}"
             );
             let mut h = Preset::Head.config(50, 1);
-            if let Some(r) = &mut h.region {
-                r.sigma_scale = x;
+            if let Some(a) = &mut h.appearance {
+                a.colour_weight = x;
             }
             assert!(
                 h.validate()
                     .unwrap_err()
                     .to_string()
-                    .contains("region.sigma_scale")
+                    .contains("appearance.colour_weight")
             );
             let mut w = Preset::WHmm.config(50, 1);
             if let crate::ClutterMode::Switching(cfg) = &mut w.clutter {

@@ -39,7 +39,10 @@ pub struct ReacquisitionSettings {
     /// ... and while its scale and elongation are within this log-ratio of the remembered ones:
     /// a contour shrinking onto the visible part of a target that slides behind an occluder is
     /// not a confident lock, whatever γ̂ says (w-eval's α̂ stays "locked" on the sliver).
-    pub shape_tolerance: f64,
+    /// `None`: no shape test, the status alone says whether the track is locked (the appearance
+    /// trackers, whose lock chain reads the target's colour: a face that grows as it nears the
+    /// camera is still held).
+    pub shape_tolerance: Option<f64>,
     /// The jump starts from the memory as it was this many locked frames before the last one: a
     /// track in trouble lags behind its target for a few frames before any test flags it.
     pub rollback: usize,
@@ -66,7 +69,7 @@ impl Default for ReacquisitionSettings {
     fn default() -> Self {
         Self {
             lock_gamma: 0.15,
-            shape_tolerance: 0.15,
+            shape_tolerance: Some(0.15),
             rollback: 5,
             share_rate: 0.02,
             max_share: 0.3,
@@ -101,7 +104,11 @@ impl ReacquisitionSettings {
         }
         for (name, v, positive) in [
             ("reacquisition.share_rate", self.share_rate, false),
-            ("reacquisition.shape_tolerance", self.shape_tolerance, true),
+            (
+                "reacquisition.shape_tolerance",
+                self.shape_tolerance.unwrap_or(1.0),
+                true,
+            ),
             ("reacquisition.spread", self.spread, true),
             ("reacquisition.spread_growth", self.spread_growth, false),
         ] {
@@ -151,8 +158,17 @@ impl TrackMemory {
         self.frame
     }
 
-    /// Whether `state` has the remembered scale and elongation, within a log-ratio `tolerance`.
-    pub fn shape_agrees(&self, space: ShapeSpace, state: &StateVector, tolerance: f64) -> bool {
+    /// Whether `state` has the remembered scale and elongation, within a log-ratio `tolerance`
+    /// (always without one).
+    pub fn shape_agrees(
+        &self,
+        space: ShapeSpace,
+        state: &StateVector,
+        tolerance: Option<f64>,
+    ) -> bool {
+        let Some(tolerance) = tolerance else {
+            return true;
+        };
         let ratio = |a: f64, b: f64| (a / b).ln().abs();
         ratio(space.scale(state), space.scale(&self.state)) <= tolerance
             && ratio(space.elongation(state), space.elongation(&self.state)) <= tolerance

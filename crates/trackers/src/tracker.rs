@@ -171,9 +171,6 @@ pub(crate) fn check_initial(ellipse: &Ellipse) -> Result<()> {
 /// # Errors
 /// An invalid configuration.
 pub fn build(config: TrackerConfig) -> Result<Box<dyn Tracker>> {
-    if config.region.is_some() {
-        return Ok(Box::new(crate::region::RegionTracker::new(config)?));
-    }
     Ok(Box::new(crate::working_scale::ScaledTracker::new(config)?))
 }
 
@@ -182,18 +179,11 @@ pub fn build(config: TrackerConfig) -> Result<Box<dyn Tracker>> {
 /// particles in the tracker's working pixels ([`crate::working_scale`]).
 ///
 /// # Errors
-/// An invalid configuration, or one of the region tracker (`region` settings), which has no
-/// place for other terms.
+/// An invalid configuration.
 pub fn build_with_terms(
     config: TrackerConfig,
     terms: Vec<Box<dyn crate::ObservationTerm>>,
 ) -> Result<Box<dyn Tracker>> {
-    if config.region.is_some() {
-        return Err(Error::InvalidSetting {
-            name: "region",
-            reason: "the region tracker takes no observation terms of yours".into(),
-        });
-    }
     let mut inner = ParticleTracker::new(config)?;
     for term in terms {
         inner.likelihood.push(term);
@@ -553,16 +543,27 @@ impl ParticleTracker {
         Ok(mean)
     }
 
+    /// The ellipse reported for a tracked one: in the annotation's convention
+    /// ([`Appearance::reported`]).
+    fn reported(&self, e: &Ellipse) -> Ellipse {
+        self.appearance.as_ref().map_or(*e, |a| a.reported(e))
+    }
+
     fn report(&self, state: StateVector, millis: f64) -> Result<Estimate> {
         let pose = self.config.space.pose(&state);
-        let ellipse = pose.to_ellipse().ok_or(Error::BadFrame {
+        let tracked = pose.to_ellipse().ok_or(Error::BadFrame {
             frame: self.frame,
             reason: "the estimated contour is not finite".into(),
         })?;
+        let ellipse = self.reported(&tracked);
+        let bbox = match &self.appearance {
+            Some(_) => ellipse.bounding_box(),
+            None => pose_box(&pose),
+        };
         Ok(Estimate {
             frame: self.frame,
             ellipse,
-            bbox: pose_box(&pose),
+            bbox,
             state,
             ess: self.config.particles as f64,
             diagnostics: None,
@@ -670,8 +671,18 @@ impl Tracker for ParticleTracker {
         // Exactly what the shape space can represent, or an error (a rotated ellipse for a
         // tracker of axis-aligned ones).
         let ellipse = self.config.initial_ellipse(&ellipse)?;
+        let appearance = self.config.appearance.as_ref();
+        self.appearance = appearance
+            .map(|settings| Appearance::start(settings.clone(), &frame, &ellipse))
+            .transpose()?;
+        // The region the appearance terms follow for this annotation (the annotation itself
+        // without them); estimates are reported back in the annotation's convention.
+        let tracked = self
+            .appearance
+            .as_ref()
+            .map_or(ellipse, |a| a.tracked(&ellipse));
         let space = self.config.space;
-        let centre = space.from_ellipse(&ellipse);
+        let centre = space.from_ellipse(&tracked);
         let s0 = space.scale(&centre);
         let d = &self.config.dynamics;
         let (e0, min) = (space.elongation(&centre), d.min_scale);
@@ -706,13 +717,10 @@ impl Tracker for ParticleTracker {
         self.previous.clear();
         self.previous.extend_from_slice(frame.data());
         self.frame = 0;
-        self.visibility =
-            matches!(self.dynamics.occlusion, OcclusionModel::Status(_)).then(Visibility::default);
-        self.appearance = self
-            .config
-            .appearance
-            .map(|settings| Appearance::start(settings, &frame, &ellipse))
+        self.visibility = matches!(self.dynamics.occlusion, OcclusionModel::Status(_))
+            .then(Visibility::new)
             .transpose()?;
+
         self.last_state = centre;
         self.memory = TrackMemory::new(centre, 0);
         self.history.clear();
@@ -867,7 +875,7 @@ impl Tracker for ParticleTracker {
             .filter_map(|i| {
                 let ellipse = self.config.space.pose(&set.states()[i].now).to_ellipse()?;
                 Some(WeightedEllipse {
-                    ellipse,
+                    ellipse: self.reported(&ellipse),
                     weight: w[i],
                 })
             })

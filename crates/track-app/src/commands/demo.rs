@@ -246,7 +246,7 @@ fn write_demo_report(
                      density, occluded fraction and status) beside the estimates."
                         .to_owned(),
                 );
-                notes.push(crate::report::ess_note(config.region.is_some()));
+                notes.push(crate::report::ess_note(config.is_tempered()));
                 notes
             },
         },

@@ -119,7 +119,7 @@ pub fn run(args: &Args) -> Result<()> {
     )?;
     let switching = matches!(config.clutter, trackers::ClutterMode::Switching(_))
         || !matches!(config.occlusion, trackers::OcclusionMode::None);
-    if !switching || config.region.is_some() {
+    if !switching {
         return Err(AppError::setting(
             "--tracker",
             format!("{} has no switching process to learn", config.name),

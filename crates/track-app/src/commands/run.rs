@@ -503,15 +503,6 @@ impl CheckedInput {
             },
         )?;
         if args.smooth {
-            if config.region.is_some() {
-                return Err(AppError::setting(
-                    "--smooth",
-                    format!(
-                        "the {} tracker cannot be smoothed (only the contour trackers record their particles)",
-                        config.name
-                    ),
-                ));
-            }
             config.filter.history = Some(Default::default());
         }
         let sequence = open_sequence(&args.sequence)?;
@@ -871,11 +862,11 @@ pub fn command_line(args: impl IntoIterator<Item = std::ffi::OsString>) -> Strin
     words.join(" ")
 }
 
-/// The report's metrics rows for the tracker of `config`: the region tracker has no partial
-/// state, so its status counts are locked / lost.
+/// The report's metrics rows for the tracker of `config`: a tracker without a partial state
+/// (the lock chain) counts its frames locked / lost.
 fn tracker_rows(config: &TrackerConfig, summary: &Summary) -> Vec<(String, String)> {
     let mut rows = summary_rows(summary);
-    if config.region.is_some()
+    if !config.has_partial_state()
         && let Some([l, _, o]) = summary.status_counts
     {
         for (name, value) in &mut rows {
@@ -893,7 +884,7 @@ fn tracker_rows(config: &TrackerConfig, summary: &Summary) -> Vec<(String, Strin
 /// probabilities are.
 fn report_notes(config: &TrackerConfig, summary: &Summary) -> Vec<String> {
     let mut notes = crate::report::standard_notes(summary);
-    notes.push(crate::report::ess_note(config.region.is_some()));
+    notes.push(crate::report::ess_note(config.is_tempered()));
     notes
 }
 

@@ -1,5 +1,5 @@
 //! The target's appearance: its colour against its background's and its grey template, read in
-//! a window around the target at a working scale and learnt from the frames where the target is
+//! a window around the target (in the tracker's working pixels) and learnt from the frames where the target is
 //! held. Three observation terms read it, each a log-likelihood added to the particle's weight
 //! (Odobez's object likelihood p_o, Eq. 18, "shape or colour"):
 //!
@@ -15,7 +15,6 @@
 //! A two-state lock chain ([`crate::monitor::lock`]) reads the estimate's colour similarity to
 //! the first frame's target: learning stops while the target is believed lost.
 
-pub(crate) mod calibration;
 pub(crate) mod colour;
 pub(crate) mod window;
 
@@ -37,13 +36,9 @@ const MAX_BACKGROUND_SIMILARITY: f64 = 0.9;
 
 /// Settings of the appearance model and its three terms. Every field has a default, so a
 /// configuration file may give only what it changes.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct AppearanceSettings {
-    /// Geometric-mean side of the target in working pixels: the window is read at the scale
-    /// that maps the target to this size (never above the frame's resolution), so the terms cost
-    /// the same for any target size. Default 32.
-    pub working_size: f64,
     /// Half-size of the window around the last estimate, in its half-axes (default 3).
     pub search: f64,
     /// Hue and saturation bins of the colour histogram (each; default 8).
@@ -81,12 +76,15 @@ pub struct AppearanceSettings {
     /// Most centres the detection of [`Appearance::detect`] scores in one frame (default 1024):
     /// its cost bound while the whole frame is searched.
     pub max_detection_centres: usize,
+    /// Scale factors of the annotation tried at the first frame for the region the colours
+    /// support ([`Appearance::tracked`]; default 0.8 to 1.25, about 5 % apart). Empty: the
+    /// annotation is tracked as drawn.
+    pub calibration_scales: Vec<f64>,
 }
 
 impl Default for AppearanceSettings {
     fn default() -> Self {
         Self {
-            working_size: 32.0,
             search: 3.0,
             hs_bins: 8,
             value_bins: 8,
@@ -102,6 +100,7 @@ impl Default for AppearanceSettings {
             template_rate: 0.05,
             lock_persistence: 0.95,
             max_detection_centres: 1024,
+            calibration_scales: vec![0.8, 0.85, 0.9, 0.95, 1.06, 1.12, 1.18, 1.25],
         }
     }
 }
@@ -148,6 +147,8 @@ pub struct Appearance {
     template: Vec<f32>,
     /// The template the terms read this frame.
     reference_template: Vec<f32>,
+    /// Half-axes of the tracked region over the annotation's (see [`Appearance::tracked`]).
+    calibration: f64,
     /// The last estimate's area in working pixels (the colour contrast's unit).
     reference_area: f64,
     lock: LockChain,
@@ -180,17 +181,25 @@ impl Appearance {
                 ),
             });
         };
-        let grid = motion_est::unit_disc_grid(settings.template_grid);
-        let mut template = vec![0.0; grid.len()];
-        window.patch(e, &grid, &mut template)?;
         let mut ratios = Vec::new();
         log_ratios(&target, &background, &mut ratios);
         window.integrate(&ratios);
+        let calibration = calibrate(
+            &window,
+            e,
+            settings.contrast_ring,
+            &settings.calibration_scales,
+        );
+        let tracked = scaled(e, calibration);
+        let grid = motion_est::unit_disc_grid(settings.template_grid);
+        let mut template = vec![0.0; grid.len()];
+        window.patch(&tracked, &grid, &mut template)?;
         Ok(Self {
+            calibration,
             background_similarity: target
                 .bhattacharyya(&background)
                 .clamp(0.0, MAX_BACKGROUND_SIMILARITY),
-            reference_area: window.area(e),
+            reference_area: window.area(&tracked),
             reference_template: template.clone(),
             initial_template: template.clone(),
             template,
@@ -207,13 +216,30 @@ impl Appearance {
         })
     }
 
+    /// The region the tracker follows for the annotation `e`: `e` scaled about its centre by the
+    /// factor, among [`AppearanceSettings::calibration_scales`], whose colour contrast on the
+    /// first frame is best. An annotated box and the region the colours support need not
+    /// coincide (a face box leaves out hair and ears of the face's colour, a loose box takes in
+    /// wall); tracking the annotation would let the estimate settle onto the colours' region
+    /// over the first frames while the scale prior pulls it back. Every reported ellipse is
+    /// scaled back ([`Appearance::reported`]), so the output keeps the user's convention.
+    pub fn tracked(&self, e: &Ellipse) -> Ellipse {
+        scaled(e, self.calibration)
+    }
+
+    /// The annotation-convention ellipse of a tracked region `e` (the inverse of
+    /// [`Appearance::tracked`]).
+    pub fn reported(&self, e: &Ellipse) -> Ellipse {
+        scaled(e, 1.0 / self.calibration)
+    }
+
     /// Reads the window around `estimate` (the whole frame while the target is believed lost)
     /// and prepares what the terms read: the log-ratios of the blended models, the reference
     /// area and the reference template.
     pub fn read(&mut self, frame: &Frame<'_>, estimate: &Ellipse) {
-        let s = self.settings;
+        let s = &self.settings;
         let whole = self.lock.p_lost() > 0.5;
-        read_window(&s, &mut self.window, frame, &self.bins, estimate, whole);
+        read_window(s, &mut self.window, frame, &self.bins, estimate, whole);
         let mut target = self.initial_target.clone();
         target.blend(&self.target, s.learnt_share);
         let mut background = self.initial_background.clone();
@@ -303,8 +329,8 @@ impl Appearance {
     /// # Errors
     /// A non-finite estimate.
     pub fn observe(&mut self, e: &Ellipse) -> Result<()> {
-        let s = self.settings;
-        let (inside, ring) = counts(&s, &self.window, self.bins.len(), e);
+        let s = &self.settings;
+        let (inside, ring) = counts(s, &self.window, self.bins.len(), e);
         let rho = inside
             .as_ref()
             .map_or(0.0, |h| h.bhattacharyya(&self.initial_target));
@@ -340,7 +366,7 @@ impl Appearance {
     }
 }
 
-/// Reads the window of `frame` around `e` (the whole frame when `whole`) at the working scale.
+/// Reads the window of `frame` around `e` (the whole frame when `whole`).
 fn read_window(
     s: &AppearanceSettings,
     window: &mut WorkingWindow,
@@ -350,7 +376,6 @@ fn read_window(
     whole: bool,
 ) {
     let (fw, fh) = (frame.width() as f64, frame.height() as f64);
-    let side = 2.0 * (e.a * e.b).abs().sqrt();
     let rect = if whole {
         [0.0, 0.0, fw, fh]
     } else {
@@ -358,10 +383,34 @@ fn read_window(
         [e.cx - hx, e.cy - hy, e.cx + hx, e.cy + hy]
     };
     let area = (rect[2].min(fw) - rect[0].max(0.0)) * (rect[3].min(fh) - rect[1].max(0.0));
-    let step = (side / s.working_size)
-        .max(1.0)
-        .max((area.max(0.0) / MAX_WINDOW_PIXELS).sqrt());
+    // One window pixel per pixel of the tracker's frame, which the working scale has already
+    // sized to the target ([`crate::working_scale`]); coarser only to keep a whole frame under
+    // the bound.
+    let step = (area.max(0.0) / MAX_WINDOW_PIXELS).sqrt().max(1.0);
     window.read(frame, bins, rect, step);
+}
+
+/// The factor among `scales` whose scaling of `e` has the best colour contrast (ring `ring`) on
+/// a window whose log-ratios are integrated; 1 (the annotation) on ties and when none is better.
+fn calibrate(window: &WorkingWindow, e: &Ellipse, ring: f64, scales: &[f64]) -> f64 {
+    let reference = window.area(e);
+    let mut best = (1.0, window.contrast(e, ring, reference));
+    for &scale in scales {
+        let c = window.contrast(&scaled(e, scale), ring, reference);
+        if c > best.1 {
+            best = (scale, c);
+        }
+    }
+    best.0
+}
+
+/// `e` with its half-axes times `factor`, about the same centre.
+fn scaled(e: &Ellipse, factor: f64) -> Ellipse {
+    Ellipse {
+        a: e.a * factor,
+        b: e.b * factor,
+        ..*e
+    }
 }
 
 /// The colour histograms inside `e` and of the background ring around it.

@@ -143,11 +143,6 @@ impl WorkingWindow {
         }
     }
 
-    /// Full-resolution pixels per working pixel.
-    pub fn step(&self) -> f64 {
-        self.step
-    }
-
     /// The window in full-resolution pixels, `[x0, y0, x1, y1]`.
     pub fn bounds(&self) -> [f64; 4] {
         [
@@ -239,35 +234,6 @@ impl WorkingWindow {
     pub fn area(&self, e: &Ellipse) -> f64 {
         let (_, _, a, b) = self.to_working(e);
         std::f64::consts::PI * a * b
-    }
-
-    /// The centre of the best [`WorkingWindow::contrast`] of an ellipse of half-axes `axes`
-    /// (full-resolution pixels) over a grid of centres spanning the window, `stride` working
-    /// pixels apart; `None` for an empty grid.
-    pub fn best_centre(&self, axes: (f64, f64), ring: f64, stride: f64) -> Option<([f64; 2], f64)> {
-        let stride = stride.max(1.0);
-        let reference = std::f64::consts::PI * axes.0 * axes.1 / (self.step * self.step);
-        let mut best: Option<([f64; 2], f64)> = None;
-        let mut y = 0.5 * stride;
-        while y < self.height as f64 {
-            let mut x = 0.5 * stride;
-            while x < self.width as f64 {
-                let e = Ellipse {
-                    cx: self.origin[0] + x * self.step,
-                    cy: self.origin[1] + y * self.step,
-                    a: axes.0,
-                    b: axes.1,
-                    angle: 0.0,
-                };
-                let c = self.contrast(&e, ring, reference);
-                if best.is_none_or(|(_, b)| c > b) {
-                    best = Some(([e.cx, e.cy], c));
-                }
-                x += stride;
-            }
-            y += stride;
-        }
-        best
     }
 
     /// Samples the grey window at `grid` (points of the unit disc) mapped onto the ellipse `e`

@@ -16,15 +16,15 @@
 //! `mclutter` scene scores a visible target no higher than noise). A filter that climbs a
 //! featureless image still finds a local maximum, so noise and a checkerboard give z of about
 //! −1 to 2; a contour on a real target's edges stands out by several. z drives a two-state
-//! (seen, unseen) chain, the same forward filter as the region tracker's
-//! ([`crate::region::status::LostChain`]); the reported α probabilities are Wu's given that the
+//! (seen, unseen) chain, the same forward filter as the appearance trackers' lock chain
+//! ([`crate::monitor::lock::LockChain`]); the reported α probabilities are Wu's given that the
 //! target is seen, and P(unseen) is added to "lost". The check only reports: the filter, its
 //! hidden processes and the reacquisition memory are the papers' as before.
 
 use dbn_switch::{StatusEstimate, TrackStatus};
 use vision_core::Ellipse;
 
-use crate::region::status::LostChain;
+use crate::monitor::lock::LockChain;
 
 /// Directions the estimate's contour is moved to for the null placements.
 pub const SHIFTS: usize = 16;
@@ -44,18 +44,20 @@ const PERSISTENCE: f64 = 0.95;
 /// The seen/unseen chain of one track.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Visibility {
-    chain: LostChain,
-}
-
-impl Default for Visibility {
-    fn default() -> Self {
-        Self {
-            chain: LostChain::new(PERSISTENCE, 0.0),
-        }
-    }
+    chain: LockChain,
 }
 
 impl Visibility {
+    /// A chain that starts seen.
+    ///
+    /// # Errors
+    /// None in practice: the persistence is a valid constant.
+    pub fn new() -> crate::Result<Self> {
+        Ok(Self {
+            chain: LockChain::new(PERSISTENCE)?,
+        })
+    }
+
     /// One forward step on the estimate `estimate` in the grey frame `grey` of `size`; returns
     /// P(unseen). A frame where the contour or too many null placements fall outside the frame
     /// leaves the chain as it was.

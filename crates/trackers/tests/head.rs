@@ -1,4 +1,4 @@
-//! The region tracker (`head` preset) on synthetic colour scenes with exact ground truth: it
+//! The recommended tracker (`head` preset) on synthetic colour scenes with exact ground truth: it
 //! follows a textured face-coloured ellipse across a textured background, keeps its size, knows
 //! when the target has gone and finds it again, whatever the seed.
 

@@ -1,4 +1,4 @@
-//! Cost of one `head` (region tracker) update against the target's and the frame's size: a
+//! Cost of one `head` update against the target's and the frame's size: a
 //! 640×480 frame with a 150×200 px head against a 320×240 frame with a 50×60 px head, 200
 //! particles, one thread. The frames are real when the development set sits beside the checkout
 //! (`../shared/data/real/Boy/img/0001.jpg`, and the same frame halved), synthetic texture
@@ -30,7 +30,7 @@ fn rgb_frame(w: u32, h: u32) -> (Vec<u8>, &'static str) {
     (out, "synthetic")
 }
 
-fn region_scale(c: &mut Criterion) {
+fn head_scale(c: &mut Criterion) {
     let mut group = c.benchmark_group("head_update_200_particles");
     group.throughput(Throughput::Elements(1));
     group.sample_size(30);
@@ -67,7 +67,7 @@ fn region_scale(c: &mut Criterion) {
 
 fn benches() {
     let mut c = Criterion::default().configure_from_args();
-    region_scale(&mut c);
+    head_scale(&mut c);
 }
 
 criterion_main!(benches);
