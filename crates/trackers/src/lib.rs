@@ -66,7 +66,6 @@ mod monitor;
 pub mod observation;
 mod particle;
 mod proposal;
-pub mod ranges;
 mod reacquire;
 pub mod smoothing;
 mod space;
@@ -76,9 +75,10 @@ pub mod working_scale;
 pub use appearance::AppearanceSettings;
 pub use config::{
     AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, ClutterMode, ConfigFormat, DEFAULT_PARTICLES,
-    DEFAULT_SEED, MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings, OCCLUSION_ARC,
-    OcclusionMode, PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig,
-    UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA,
+    DEFAULT_SEED, FIXED_LAMBDA, HEAD_MIN_ESS_FRACTION, HEAD_WORKING_RADIUS, MAX_CLUSTER_ITERATIONS,
+    MAX_PARTICLES, MotionSettings, OCCLUSION_ARC, OcclusionMode, PoseEstimator, Preset,
+    ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig, UNKNOWN_OCCLUDER_SHARE,
+    W_OCC_SIGMA_GAMMA, ranges,
 };
 pub use dynamics::{DynamicsSettings, NoiseKind};
 pub use error::{Error, Result};

@@ -41,7 +41,9 @@ pub struct ReacquisitionSettings {
     /// not a confident lock, whatever γ̂ says (w-eval's α̂ stays "locked" on the sliver).
     /// `None`: no shape test, the status alone says whether the track is locked (the appearance
     /// trackers, whose lock chain reads the target's colour: a face that grows as it nears the
-    /// camera is still held).
+    /// camera is still held). A configuration file that leaves it out means `None` (TOML has no
+    /// null, so this is how a printed `None` loads back), although the default is 0.15.
+    #[serde(default)]
     pub shape_tolerance: Option<f64>,
     /// The jump starts from the memory as it was this many locked frames before the last one: a
     /// track in trouble lags behind its target for a few frames before any test flags it.

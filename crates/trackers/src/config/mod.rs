@@ -1,18 +1,34 @@
 //! Tracker configuration: any shape space, any proposal, any product of likelihood terms, any
-//! hidden switching processes — and the named presets of both papers.
+//! hidden switching processes — and the named presets of both papers ([`presets`]).
+//!
+//! A configuration names the pieces it uses and nothing else. Its printed form (JSON or TOML,
+//! `track config`; the [`Serialize`] of [`TrackerConfig`], [`print`]) leaves out every section
+//! and field the configured tracker does not read, and loading fills in what is missing with the
+//! value the printer left out, so `parse(print(c)) == c`. A file that sets an unread setting to
+//! anything else is refused by [`TrackerConfig::validate`], naming the setting and why it is not
+//! read: a setting a tracker cannot honour is never silently ignored.
 
-use dbn_switch::{ClutterConfig, LambdaModel, OcclusionConfig, StatusConfig};
+use dbn_switch::{ClutterConfig, OcclusionConfig, StatusConfig};
 use serde::{Deserialize, Serialize};
 use smc_core::{FilterSettings, ResamplingScheme};
 
 use crate::appearance::AppearanceSettings;
-use crate::dynamics::{DynamicsSettings, NoiseKind};
-use crate::observation::{ImplicitMotionSettings, LikelihoodSettings};
+use crate::dynamics::DynamicsSettings;
+use crate::observation::LikelihoodSettings;
 use crate::reacquire::ReacquisitionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
-use contour_obs::OcclusionForm;
 use vision_core::Ellipse;
+
+mod presets;
+mod print;
+pub mod ranges;
+mod unread;
+
+pub use presets::{
+    CLUTTER_LINE_FRACTION, FIXED_LAMBDA, HEAD_MIN_ESS_FRACTION, HEAD_WORKING_RADIUS, OCCLUSION_ARC,
+    Preset, SHAPE_VELOCITY_RETENTION, UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA,
+};
 
 /// Settings of Odobez's motion proposal (Eq. 16) and of the motion estimates behind p_c1.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -74,7 +90,9 @@ pub enum ProposalKind {
     Motion,
 }
 
-/// How the clutter density λ of the particles is modelled.
+/// How the clutter density λ of the particles is modelled. Read by Wu's likelihood only
+/// ([`LikelihoodSettings::clutter`]); the default, which a file without `clutter` loads as, is
+/// one fixed λ of [`FIXED_LAMBDA`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ClutterMode {
@@ -87,11 +105,20 @@ pub enum ClutterMode {
     Switching(ClutterConfig),
 }
 
+impl Default for ClutterMode {
+    fn default() -> Self {
+        ClutterMode::Fixed {
+            lambda: FIXED_LAMBDA,
+        }
+    }
+}
+
 /// How occlusion is modelled.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum OcclusionMode {
-    /// No occlusion (γ = 0).
+    /// No occlusion (γ = 0); the default.
+    #[default]
     None,
     /// γ as a Gaussian random walk (Wu Eq. 13).
     RandomWalk(OcclusionConfig),
@@ -99,18 +126,26 @@ pub enum OcclusionMode {
     Status(StatusConfig),
 }
 
-/// How the reported pose is computed from the particles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+/// How the reported pose is computed from the particles. Read only with clutter switching
+/// ([`ClutterMode::Switching`]): without it there is no clutter class β̂, and the pose is the
+/// weighted mean.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PoseEstimator {
-    /// The weighted mean of the states.
+    /// The weighted mean of the states; the default.
+    #[default]
     Mean,
-    /// The mean of the particles of the most probable clutter class β̂ (Wu §4).
+    /// The mean of the particles of the most probable clutter class β̂ (Wu §4); needs clutter
+    /// switching.
     ClassConditionalMean,
 }
 
-/// Everything that defines a tracker. Load from JSON or TOML, or start from a [`Preset`].
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Everything that defines a tracker. Load from JSON or TOML ([`TrackerConfig::parse`]), or start
+/// from a [`Preset`].
+///
+/// Its serialized form leaves out what the tracker does not read (see the [module](self) and
+/// [`TrackerConfig::validate`]); every section it can leave out has a default here.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrackerConfig {
     /// A name for reports.
@@ -125,14 +160,19 @@ pub struct TrackerConfig {
     pub dynamics: DynamicsSettings,
     /// Proposal.
     pub proposal: ProposalKind,
-    /// Motion estimation settings (used by the motion proposal and p_c1).
+    /// Motion estimation settings, read only by the motion proposal and p_c1
+    /// ([`TrackerConfig::needs_motion`]); default [`MotionSettings::default`].
     #[serde(default)]
     pub motion: MotionSettings,
-    /// Likelihood terms.
+    /// Likelihood terms (default: none; a tracker then needs its appearance terms).
+    #[serde(default)]
     pub likelihood: LikelihoodSettings,
-    /// Clutter process.
+    /// Clutter process, read only with Wu's likelihood (default: one fixed λ,
+    /// [`ClutterMode::default`]).
+    #[serde(default)]
     pub clutter: ClutterMode,
-    /// Occlusion process.
+    /// Occlusion process (default none).
+    #[serde(default)]
     pub occlusion: OcclusionMode,
     /// Particle filter settings (resampling threshold, parallelism).
     #[serde(default)]
@@ -140,7 +180,8 @@ pub struct TrackerConfig {
     /// Resampling scheme.
     #[serde(default)]
     pub resampling: ResamplingScheme,
-    /// Pose estimator.
+    /// Pose estimator, read only with clutter switching (default the mean).
+    #[serde(default)]
     pub estimator: PoseEstimator,
     /// Spread of the initial particles around the initial ellipse, as a fraction of the dynamics
     /// noise (default 0.5).
@@ -154,14 +195,15 @@ pub struct TrackerConfig {
     pub reacquisition: Option<ReacquisitionSettings>,
     /// The mean radius, in pixels, that the target is shrunk to before tracking (see
     /// [`crate::working_scale`]); a target no larger is tracked at full resolution. `None` (the
-    /// default, and every preset's): always full resolution, as the papers. Measured on the real
-    /// development set, it helped some presets and hurt others (docs/RESULTS.md, decision log).
+    /// default, and every paper preset's): always full resolution, as the papers; `head`'s is
+    /// [`HEAD_WORKING_RADIUS`]. Measured on the real development set, it helped some presets and
+    /// hurt others (docs/RESULTS.md, decision log).
     #[serde(default)]
     pub working_radius: Option<f64>,
     /// The appearance model and its colour-contrast, template and contour-contrast terms
     /// ([`crate::appearance`]); `None` (every paper preset): off. With it, the lock chain on
     /// the estimate's colour reports the track's status unless Wu's status process does.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default)]
     pub appearance: Option<AppearanceSettings>,
 }
 
@@ -169,7 +211,7 @@ fn yes() -> bool {
     true
 }
 
-fn default_init_spread() -> f64 {
+pub(crate) fn default_init_spread() -> f64 {
     0.5
 }
 
@@ -280,7 +322,8 @@ impl TrackerConfig {
                 reason: "clutter switching and occlusion need Wu's clutter likelihood".into(),
             });
         }
-        Ok(())
+        // Last: a setting that is out of range or contradicts another is named for that first.
+        self.check_unread()
     }
 
     /// Whether the tracker's status has a partially occluded state: Wu's α (the status HMM) or
@@ -359,59 +402,44 @@ impl TrackerConfig {
         })
     }
 
-    /// Whether motion must be estimated every frame.
+    /// Whether motion must be estimated every frame: the motion proposal or motion consistency
+    /// (p_c1). Only then is [`TrackerConfig::motion`] read.
     pub fn needs_motion(&self) -> bool {
         self.proposal == ProposalKind::Motion || self.likelihood.motion_consistency
     }
+
+    /// Whether the tracker has measurement lines, whose edge detector `--edge-threshold` sets:
+    /// Odobez's shape likelihood or Wu's clutter likelihood.
+    pub fn has_measurement_lines(&self) -> bool {
+        self.likelihood.shape.is_some() || self.likelihood.clutter.is_some()
+    }
+
+    /// Sets the 1-D edge detector's threshold, in grey levels per pixel, of every
+    /// measurement-line term.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] named `edge threshold` when the tracker has no measurement
+    /// lines ([`TrackerConfig::has_measurement_lines`]): the threshold would be ignored.
+    pub fn set_edge_threshold(&mut self, threshold: f32) -> Result<()> {
+        if !self.has_measurement_lines() {
+            return Err(Error::InvalidSetting {
+                name: "edge threshold",
+                reason: format!(
+                    "the `{}` tracker has no measurement lines (neither `likelihood.shape` nor \
+                     `likelihood.clutter`), so an edge threshold would not be read",
+                    self.name
+                ),
+            });
+        }
+        if let Some(shape) = self.likelihood.shape.as_mut() {
+            shape.lines.edge.threshold = threshold;
+        }
+        if let Some(clutter) = self.likelihood.clutter.as_mut() {
+            clutter.lines.edge.threshold = threshold;
+        }
+        Ok(())
+    }
 }
-
-/// ρ of the size and shape components in every preset: 0.5, not the papers' 1. With ρ = 1 the
-/// velocity of scale, aspect and shear is a random walk that, over a hundred frames, deforms the
-/// contour on clutter (docs/RESULTS.md, decision log); translation keeps ρ = 1 as in Odobez
-/// Eq. 17.
-pub const SHAPE_VELOCITY_RETENTION: f64 = 0.5;
-
-/// The share of a measurement line where background clutter can appear, in every preset with
-/// Wu's likelihood (see [`LikelihoodSettings::clutter_line_fraction`]). Half of each measurement
-/// line lies on the target; with Wu Eq. 1's whole line, λ̂ comes out at half the background
-/// density and β̂ picks the wrong class (docs/RESULTS.md, decision log).
-pub const CLUTTER_LINE_FRACTION: f64 = 0.5;
-
-/// The share of an occluded line's edge count given to an occluder of unknown texture in full
-/// (see [`OcclusionForm::Independent`]; w-occ and w-eval read γ through the neutral
-/// occlusion arc instead, [`OCCLUSION_ARC`], which has no share). With the share alone, a contour shrinks onto the
-/// visible sliver of a target sliding behind the `occlusion` scene's occluder and γ̂ stays near
-/// 0 while the target is hidden. On `mclutter`, a share of 0.5 or 1 keeps tracks that 0 (Wu Eq. 12
-/// as printed) loses (docs/RESULTS.md, decision log); half-and-half keeps Wu's background law for
-/// occluders that look like the background.
-pub const UNKNOWN_OCCLUDER_SHARE: f64 = 0.5;
-
-/// Whether w-occ and w-eval read γ as the hidden fraction of the contour, hidden as one arc,
-/// with every hidden (or off-image) line scored by one constant ([`OcclusionForm::NeutralArc`]);
-/// `false` gives them the independent mixture of full ([`OcclusionForm::Independent`] with
-/// [`UNKNOWN_OCCLUDER_SHARE`]). Wu's Eq. 11–12 as printed stays available as
-/// `OcclusionForm::default()`; full keeps the independent mixture, because with the arc its
-/// Table 1 S2 column fell below the 95 % target (docs/RESULTS.md, decision log). With the arc,
-/// γ̂ rises while the target is hidden and falls after it.
-pub const OCCLUSION_ARC: bool = true;
-
-/// σ_γ of w-occ's random-walk γ (Wu §6.2 and docs/MODELS.md: 0.1). w-occ reads γ through the
-/// occlusion arc ([`OCCLUSION_ARC`]) and has the reacquisition jump, as w-eval; with σ_γ = 0.1 a
-/// random walk is too slow to follow a target that slides behind an occluder in 20 frames, and
-/// the contour shrinks onto the visible sliver instead. With 0.3, γ̂ rises while the target is
-/// hidden and falls after it on every seed `tests/tracking.rs` checks; the price is the zooming
-/// `distractor` scene, where a larger σ_γ lets γ explain the mismatch of a zooming target
-/// `head`'s ESS floor after weighting, as a fraction of N ([`FilterSettings::min_ess_fraction`]):
-/// the template scores the true face tens of nats above its surroundings, which untempered would
-/// leave one particle to resample from.
-pub const HEAD_MIN_ESS_FRACTION: f64 = 0.3;
-/// `head`'s working radius, pixels: the target is shrunk to a mean radius of 16 px (a side of 32,
-/// the appearance terms' template and window resolution), so its pixel-unit settings (3 px of
-/// translation noise) are a fixed share of its size and its cost does not grow with it.
-pub const HEAD_WORKING_RADIUS: f64 = 16.0;
-
-/// (docs/RESULTS.md, decision log).
-pub const W_OCC_SIGMA_GAMMA: f64 = 0.3;
 
 /// Largest difference, in radians, between the angle of an initial ellipse and a multiple of π/2
 /// that a tracker of axis-aligned ellipses accepts as that multiple (angles typed to six
@@ -454,8 +482,10 @@ impl ConfigFormat {
 }
 
 impl TrackerConfig {
-    /// Parses a configuration written as `track config` prints it. Does not validate it
-    /// ([`TrackerConfig::validate`]).
+    /// Parses a configuration written as `track config` prints it (sections it leaves out take
+    /// their defaults), or as earlier releases printed it. Does not validate it
+    /// ([`TrackerConfig::validate`], which refuses unread settings that are not at their
+    /// defaults).
     ///
     /// # Errors
     /// A one-line message: `invalid JSON: …`, or `invalid TOML at line L, column C: …`.
@@ -474,15 +504,33 @@ impl TrackerConfig {
                     .unwrap_or_default();
                 format!("invalid TOML{at}: {}", e.message().trim())
             }),
-            ConfigFormat::Json => {
-                serde_json::from_str(text).map_err(|e| format!("invalid JSON: {e}"))
-            }
+            ConfigFormat::Json => serde_json::from_str(text)
+                .or_else(|e| {
+                    without_null_region(text)
+                        .ok_or(e)
+                        .and_then(serde_json::from_value)
+                })
+                .map_err(|e| format!("invalid JSON: {e}")),
         }
         .map_err(|message| match replaced_field(&message) {
             Some(replacement) => format!("{message}; {replacement}"),
             None => message,
         })
     }
+}
+
+/// The JSON configuration `text` without its `"region": null`, which every file the release
+/// before the one engine printed for a contour tracker holds (TOML has no null, so its files
+/// leave the field out); `None` when `text` has no null `region`. A `region` that is not null
+/// stays refused, naming what replaced it ([`replaced_field`]).
+fn without_null_region(text: &str) -> Option<serde_json::Value> {
+    let mut value: serde_json::Value = serde_json::from_str(text).ok()?;
+    let fields = value.as_object_mut()?;
+    fields
+        .get("region")
+        .is_some_and(serde_json::Value::is_null)
+        .then(|| fields.remove("region"))?;
+    Some(value)
 }
 
 /// What replaced a field of an earlier configuration file that an error names as unknown.
@@ -493,279 +541,6 @@ fn replaced_field(message: &str) -> Option<&'static str> {
          `appearance`, its tempering `filter.min_ess_fraction`, its working scale \
          `working_radius` (write a new file with `track config head`)",
     )
-}
-
-/// The named trackers of both papers, and the combination neither has.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Preset {
-    /// Odobez M1: CONDENSATION, Gaussian AR2 prior as proposal, shape likelihood (Eq. 19).
-    M1,
-    /// Odobez M2: M1 with the implicit motion likelihood p_sh · p_c2 (Eq. 22–23).
-    M2,
-    /// Odobez M3: motion proposal (Eq. 16), Cauchy prior (Eq. 17), weight Eq. 24.
-    M3,
-    /// Wu: affine shape space, Poisson-clutter likelihood with one fixed λ.
-    WFixed,
-    /// Wu: β switching among the learnt λ̄ (no HMM, §6.1).
-    WSwitch,
-    /// Wu: the {β, λ} HMM (Fig. 5–6).
-    WHmm,
-    /// Wu: the {β, λ} HMM and occlusion γ as a random walk (§5, Eq. 13–14), read through the
-    /// occlusion arc, with the reacquisition jump (see [`W_OCC_SIGMA_GAMMA`]).
-    WOcc,
-    /// Wu: the {β, λ} HMM and the status HMM {α, γ} (§6.3).
-    WEval,
-    /// Odobez's motion proposal and implicit likelihood with Wu's switching clutter, occlusion and
-    /// status processes.
-    Full,
-    /// The recommended tracker for real footage: the appearance terms ([`crate::appearance`]:
-    /// colour contrast, template, contour contrast) with Odobez's Gaussian AR2 prior, at a
-    /// working scale set by the target's size, tempered, with the lock chain.
-    Head,
-}
-
-impl Preset {
-    /// Every preset.
-    pub const ALL: [Preset; 10] = [
-        Preset::M1,
-        Preset::M2,
-        Preset::M3,
-        Preset::WFixed,
-        Preset::WSwitch,
-        Preset::WHmm,
-        Preset::WOcc,
-        Preset::WEval,
-        Preset::Full,
-        Preset::Head,
-    ];
-
-    /// The command-line name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Preset::M1 => "m1",
-            Preset::M2 => "m2",
-            Preset::M3 => "m3",
-            Preset::WFixed => "w-fixed",
-            Preset::WSwitch => "w-switch",
-            Preset::WHmm => "w-hmm",
-            Preset::WOcc => "w-occ",
-            Preset::WEval => "w-eval",
-            Preset::Full => "full",
-            Preset::Head => "head",
-        }
-    }
-
-    /// Parses a command-line name.
-    ///
-    /// # Errors
-    /// [`Error::UnknownPreset`] listing the known names.
-    pub fn from_name(name: &str) -> Result<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|p| p.name() == name)
-            .ok_or_else(|| Error::UnknownPreset {
-                name: name.to_owned(),
-                known: Self::ALL.map(Preset::name).join(", "),
-            })
-    }
-
-    /// What the preset is, in one line (the table of the crate's documentation).
-    pub fn description(self) -> &'static str {
-        match self {
-            Preset::M1 => {
-                "Odobez M1 (CONDENSATION): Gaussian AR2 prior as proposal, shape likelihood"
-            }
-            Preset::M2 => "Odobez M2: M1 with the implicit motion likelihood (NCC patches)",
-            Preset::M3 => {
-                "Odobez M3: robust motion proposal, shape, implicit and explicit motion terms"
-            }
-            Preset::WFixed => {
-                "Wu: affine shape space, Poisson-clutter likelihood with one fixed lambda"
-            }
-            Preset::WSwitch => "Wu: clutter class beta switching among the learnt lambdas, no HMM",
-            Preset::WHmm => "Wu: the {beta, lambda} clutter HMM",
-            Preset::WOcc => "Wu: clutter HMM, occlusion gamma as a random walk, reacquisition",
-            Preset::WEval => "Wu: clutter HMM and the status HMM {alpha, gamma}, reacquisition",
-            Preset::Full => "Odobez's motion proposal with all of Wu's hidden processes",
-            Preset::Head => {
-                "recommended for real footage: colour, NCC template and contour contrast, lost/locked chain"
-            }
-        }
-    }
-
-    /// The preset's configuration with `particles` particles and `seed`.
-    pub fn config(self, particles: usize, seed: u64) -> TrackerConfig {
-        let odobez_dynamics = DynamicsSettings {
-            noise: NoiseKind::Gaussian,
-            sigma_translation: 3.0,
-            sigma_scale: 0.01,
-            sigma_shape: 0.01,
-            shape_velocity_retention: SHAPE_VELOCITY_RETENTION,
-            ..DynamicsSettings::default()
-        };
-        let wu_dynamics = DynamicsSettings {
-            noise: NoiseKind::Gaussian,
-            sigma_translation: 3.0,
-            sigma_scale: 0.02,
-            sigma_shape: 0.01,
-            shape_velocity_retention: SHAPE_VELOCITY_RETENTION,
-            ..DynamicsSettings::default()
-        };
-        let shape = LikelihoodSettings {
-            shape: Some(Default::default()),
-            ..LikelihoodSettings::default()
-        };
-        let clutter_only = LikelihoodSettings {
-            clutter: Some(Default::default()),
-            clutter_line_fraction: CLUTTER_LINE_FRACTION,
-            ..LikelihoodSettings::default()
-        };
-        let occlusion_likelihood = LikelihoodSettings {
-            occlusion_form: if OCCLUSION_ARC {
-                OcclusionForm::NeutralArc
-            } else {
-                OcclusionForm::Independent {
-                    unknown_occluder_share: UNKNOWN_OCCLUDER_SHARE,
-                }
-            },
-            ..clutter_only.clone()
-        };
-        let fixed_beta = ClutterConfig {
-            lambda_model: LambdaModel::Fixed,
-            ..ClutterConfig::default()
-        };
-        let base = TrackerConfig {
-            name: self.name().to_owned(),
-            particles,
-            seed,
-            space: ShapeSpace::Odobez,
-            dynamics: odobez_dynamics,
-            proposal: ProposalKind::Prior,
-            motion: MotionSettings::default(),
-            likelihood: shape.clone(),
-            clutter: ClutterMode::Fixed { lambda: 0.0824 },
-            occlusion: OcclusionMode::None,
-            filter: FilterSettings::default(),
-            resampling: ResamplingScheme::Systematic,
-            estimator: PoseEstimator::Mean,
-            init_spread: default_init_spread(),
-            working_radius: None,
-            reacquisition: None,
-            appearance: None,
-        };
-        let wu = TrackerConfig {
-            space: ShapeSpace::Affine,
-            dynamics: wu_dynamics,
-            likelihood: clutter_only,
-            ..base.clone()
-        };
-        let implicit = Some(ImplicitMotionSettings::default());
-        match self {
-            Preset::M1 => base,
-            Preset::M2 => TrackerConfig {
-                likelihood: LikelihoodSettings {
-                    implicit_motion: implicit,
-                    ..shape
-                },
-                ..base
-            },
-            Preset::M3 => TrackerConfig {
-                dynamics: DynamicsSettings {
-                    noise: NoiseKind::Cauchy,
-                    ..odobez_dynamics
-                },
-                proposal: ProposalKind::Motion,
-                likelihood: LikelihoodSettings {
-                    implicit_motion: implicit,
-                    motion_consistency: true,
-                    ..shape
-                },
-                ..base
-            },
-            Preset::WFixed => wu,
-            Preset::WSwitch => TrackerConfig {
-                clutter: ClutterMode::Switching(fixed_beta),
-                estimator: PoseEstimator::ClassConditionalMean,
-                ..wu
-            },
-            Preset::WHmm => TrackerConfig {
-                clutter: ClutterMode::Switching(ClutterConfig::default()),
-                estimator: PoseEstimator::ClassConditionalMean,
-                ..wu
-            },
-            Preset::WOcc => TrackerConfig {
-                likelihood: occlusion_likelihood.clone(),
-                reacquisition: Some(ReacquisitionSettings::default()),
-                clutter: ClutterMode::Switching(ClutterConfig::default()),
-                occlusion: OcclusionMode::RandomWalk(OcclusionConfig {
-                    sigma_gamma: W_OCC_SIGMA_GAMMA,
-                    ..OcclusionConfig::default()
-                }),
-                ..wu
-            },
-            Preset::WEval => TrackerConfig {
-                likelihood: occlusion_likelihood,
-                reacquisition: Some(ReacquisitionSettings::default()),
-                clutter: ClutterMode::Switching(ClutterConfig::default()),
-                occlusion: OcclusionMode::Status(StatusConfig::default()),
-                ..wu
-            },
-            Preset::Full => TrackerConfig {
-                dynamics: DynamicsSettings {
-                    noise: NoiseKind::Cauchy,
-                    ..odobez_dynamics
-                },
-                proposal: ProposalKind::Motion,
-                likelihood: LikelihoodSettings {
-                    implicit_motion: implicit,
-                    motion_consistency: true,
-                    clutter: Some(Default::default()),
-                    clutter_line_fraction: CLUTTER_LINE_FRACTION,
-                    shape: None,
-                    // Not the arc: with it, Table 1's S2 column (100 particles) fell below
-                    // the 95 % target for full (docs/RESULTS.md).
-                    occlusion_form: OcclusionForm::Independent {
-                        unknown_occluder_share: UNKNOWN_OCCLUDER_SHARE,
-                    },
-                },
-                clutter: ClutterMode::Switching(ClutterConfig::default()),
-                occlusion: OcclusionMode::Status(StatusConfig::default()),
-                reacquisition: Some(ReacquisitionSettings::default()),
-                ..base
-            },
-            Preset::Head => TrackerConfig {
-                likelihood: LikelihoodSettings::default(),
-                appearance: Some(AppearanceSettings::default()),
-                filter: FilterSettings {
-                    min_ess_fraction: Some(HEAD_MIN_ESS_FRACTION),
-                    ..FilterSettings::default()
-                },
-                working_radius: Some(HEAD_WORKING_RADIUS),
-                // The lock chain alone says whether the target is held: a face that grows as it
-                // nears the camera is not lost.
-                reacquisition: Some(ReacquisitionSettings {
-                    shape_tolerance: None,
-                    ..ReacquisitionSettings::default()
-                }),
-                ..base
-            },
-        }
-    }
-}
-
-impl std::fmt::Display for Preset {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for Preset {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        Self::from_name(s)
-    }
 }
 
 #[cfg(test)]
@@ -843,13 +618,139 @@ mod tests {
         assert_eq!(ConfigFormat::of_path(Path::new("a")), ConfigFormat::Json);
     }
 
+    /// The top-level keys and the keys of `section` of the printed JSON of `c`, sorted.
+    fn printed_keys(c: &TrackerConfig, section: &str) -> (Vec<String>, Vec<String>) {
+        let v = serde_json::to_value(c).unwrap();
+        let keys = |v: &serde_json::Value| {
+            v.as_object()
+                .map(|o| o.keys().cloned().collect())
+                .unwrap_or_default()
+        };
+        (keys(&v), keys(&v[section]))
+    }
+
     #[test]
-    fn every_preset_has_a_one_line_description() {
-        let mut seen = std::collections::HashSet::new();
-        for preset in Preset::ALL {
-            let d = preset.description();
-            assert!(!d.is_empty() && !d.contains('\n'), "{d}");
-            assert!(seen.insert(d), "{d} twice");
+    fn printed_configurations_name_only_what_the_tracker_reads() {
+        let has = |keys: &[String], k: &str| keys.iter().any(|x| x == k);
+        let (head, dynamics) = printed_keys(&Preset::Head.config(50, 1), "dynamics");
+        for k in ["motion", "likelihood", "clutter", "occlusion", "estimator"] {
+            assert!(!has(&head, k), "head prints {k}");
         }
+        for k in [
+            "appearance",
+            "reacquisition",
+            "working_radius",
+            "filter",
+            "dynamics",
+        ] {
+            assert!(has(&head, k), "head lacks {k}");
+        }
+        assert!(!has(&dynamics, "locked_gamma_rate") && !has(&dynamics, "hidden_exploration"));
+        assert!(has(&dynamics, "sigma_translation"));
+
+        let (m1, likelihood) = printed_keys(&Preset::M1.config(50, 1), "likelihood");
+        for k in [
+            "motion",
+            "clutter",
+            "occlusion",
+            "estimator",
+            "reacquisition",
+            "working_radius",
+            "appearance",
+        ] {
+            assert!(!has(&m1, k), "m1 prints {k}");
+        }
+        assert_eq!(likelihood, ["shape"]);
+        let (m3, likelihood) = printed_keys(&Preset::M3.config(50, 1), "likelihood");
+        assert!(has(&m3, "motion") && !has(&m3, "clutter"));
+        assert_eq!(
+            likelihood,
+            ["implicit_motion", "motion_consistency", "shape"]
+        );
+
+        let (fixed, likelihood) = printed_keys(&Preset::WFixed.config(50, 1), "likelihood");
+        assert!(has(&fixed, "clutter") && !has(&fixed, "estimator") && !has(&fixed, "motion"));
+        assert_eq!(
+            likelihood,
+            ["clutter", "clutter_line_fraction", "occlusion_form"]
+        );
+        let (hmm, dynamics) = printed_keys(&Preset::WHmm.config(50, 1), "dynamics");
+        assert!(has(&hmm, "estimator") && !has(&hmm, "occlusion"));
+        assert!(has(&dynamics, "hidden_exploration") && !has(&dynamics, "locked_gamma_rate"));
+        let (eval, dynamics) = printed_keys(&Preset::WEval.config(50, 1), "dynamics");
+        assert!(has(&eval, "occlusion") && has(&eval, "reacquisition"));
+        assert!(has(&dynamics, "hidden_exploration") && has(&dynamics, "locked_gamma_rate"));
+
+        // TOML the same: head's file has no [motion], [likelihood] or [clutter] table.
+        let toml = toml::to_string_pretty(&Preset::Head.config(50, 1)).unwrap();
+        let table: toml::Table = toml.parse().unwrap();
+        for k in ["motion", "likelihood", "clutter", "occlusion", "estimator"] {
+            assert!(!table.contains_key(k), "head's TOML prints {k}");
+        }
+    }
+
+    #[test]
+    fn an_unread_setting_off_its_default_is_printed_and_refused_on_loading() {
+        let mut c = Preset::Head.config(50, 1);
+        c.motion.offset = true;
+        c.dynamics.locked_gamma_rate = 1.5;
+        for (text, format) in [
+            (
+                serde_json::to_string_pretty(&c).unwrap(),
+                ConfigFormat::Json,
+            ),
+            (toml::to_string_pretty(&c).unwrap(), ConfigFormat::Toml),
+        ] {
+            let back = TrackerConfig::parse(&text, format).unwrap();
+            assert_eq!(back, c);
+            assert!(matches!(
+                back.validate(),
+                Err(Error::InvalidSetting {
+                    name: "motion.offset",
+                    ..
+                })
+            ));
+        }
+    }
+
+    #[test]
+    fn a_null_region_of_an_earlier_file_loads_and_a_set_one_is_refused() {
+        let c = Preset::M1.config(50, 1);
+        let mut v = serde_json::to_value(&c).unwrap();
+        v["region"] = serde_json::Value::Null;
+        let text = serde_json::to_string(&v).unwrap();
+        assert_eq!(TrackerConfig::parse(&text, ConfigFormat::Json).unwrap(), c);
+        v["region"] = serde_json::json!({"template_weight": 40.0});
+        let text = serde_json::to_string(&v).unwrap();
+        let e = TrackerConfig::parse(&text, ConfigFormat::Json).unwrap_err();
+        assert!(
+            e.contains("unknown field `region`") && e.contains("`appearance`"),
+            "{e}"
+        );
+        // Any other unknown field stays an error, null or not.
+        let mut v = serde_json::to_value(&c).unwrap();
+        v["regions"] = serde_json::Value::Null;
+        let text = serde_json::to_string(&v).unwrap();
+        assert!(TrackerConfig::parse(&text, ConfigFormat::Json).is_err());
+    }
+
+    #[test]
+    fn the_edge_threshold_is_set_on_every_measurement_line_and_refused_without_them() {
+        let mut full = Preset::Full.config(50, 1);
+        full.set_edge_threshold(12.0).unwrap();
+        assert_eq!(full.likelihood.clutter.unwrap().lines.edge.threshold, 12.0);
+        let mut m1 = Preset::M1.config(50, 1);
+        m1.set_edge_threshold(12.0).unwrap();
+        assert_eq!(m1.likelihood.shape.unwrap().lines.edge.threshold, 12.0);
+        let mut head = Preset::Head.config(50, 1);
+        let before = head.clone();
+        assert!(matches!(
+            head.set_edge_threshold(12.0),
+            Err(Error::InvalidSetting {
+                name: "edge threshold",
+                ..
+            })
+        ));
+        assert_eq!(head, before);
     }
 }

@@ -229,6 +229,7 @@ pub const SETTING_RANGES: &[SettingRange] = &[
         ..closed("appearance.lock_persistence", 0.5, 1.0)
     },
     closed("appearance.max_detection_centres", 1.0, 1e6),
+    closed("appearance.calibration_scales", 0.5, 2.0),
 ];
 
 /// The entry for a concrete path (`a.b[1][2]`): its own entry, or the list's (`a.b`).
@@ -329,16 +330,17 @@ mod tests {
             .iter()
             .map(|p| serde_json::to_value(p.config(50, 1)).unwrap())
             .collect();
-        let base = serde_json::to_value(Preset::WEval.config(50, 1)).unwrap();
+        // The motion estimator's robust functions on a tracker that reads `motion`.
+        let motion = serde_json::to_value(Preset::Full.config(50, 1)).unwrap();
         for robust in [
             serde_json::json!({"Cauchy": {"c": 2.3849}}),
             serde_json::json!({"Huber": {"c": 1.345}}),
         ] {
-            let mut v = base.clone();
+            let mut v = motion.clone();
             v["motion"]["estimator"]["robust"] = robust;
             out.push(v);
         }
-        let mut v = base.clone();
+        let mut v = serde_json::to_value(Preset::WEval.config(50, 1)).unwrap();
         v["likelihood"]["occlusion_form"] =
             serde_json::json!({"form": "arc", "unknown_occluder_share": 0.5});
         v["filter"]["output_size"] = 40.into();
