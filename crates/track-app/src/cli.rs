@@ -44,7 +44,8 @@ pub enum Command {
     /// Learn a tracker's switching parameters (T_β, T_α, σ_γ, λ̄_k) from sequences by
     /// expectation–maximisation on smoothed runs.
     LearnSwitching(commands::learn_switching::Args),
-    /// Print a preset's full configuration (JSON or TOML), to edit and pass to `--config`.
+    /// Print a preset's configuration (JSON or TOML): the settings its tracker reads, to edit and
+    /// pass to `--config`.
     Config(commands::config::Args),
 }
 

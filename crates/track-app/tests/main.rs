@@ -2,6 +2,7 @@
 //! cold build short: each test binary links the whole dependency tree).
 
 mod common;
+mod config_files;
 mod golden;
 mod learn_switching;
 mod messages;

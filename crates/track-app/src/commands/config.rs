@@ -1,4 +1,7 @@
-//! `track config`: print a preset's full configuration, the starting point of a `--config` file.
+//! `track config`: print a preset's configuration, the starting point of a `--config` file: every
+//! setting the preset's tracker reads, and nothing else (a section it does not read, such as
+//! `motion` without the motion proposal, is left out, and loads as its default; see
+//! `trackers::TrackerConfig`).
 
 use trackers::Preset;
 

@@ -131,7 +131,8 @@ pub struct OtbArgs {
     #[command(flatten)]
     pub run: TrackerRuns,
     /// Edge threshold of the measurement lines, grey levels per pixel (default: the
-    /// preset's, 8); see `track run --help`.
+    /// preset's, 8); see `track run --help`. Refused (exit 2) when a tracker run has no
+    /// measurement lines (head, the default), which would not read it.
     #[arg(long, value_parser = crate::commands::run::parse_edge_threshold)]
     pub edge_threshold: Option<f32>,
     /// A tracker configuration file (JSON or TOML, as `track config PRESET` prints), run

@@ -127,7 +127,8 @@ pub struct Args {
     pub parallel: bool,
     /// Edge threshold of the measurement lines, grey levels per pixel [default: the preset's, 8,
     /// the value the synthetic clutter is calibrated for]. Real footage is more textured: on
-    /// girl_mil 24 works better (docs/RESULTS.md).
+    /// girl_mil 24 works better (docs/RESULTS.md). Refused (exit 2) for a tracker without
+    /// measurement lines (head), which would not read it.
     #[arg(long, value_parser = parse_edge_threshold)]
     pub edge_threshold: Option<f32>,
     /// Also smooth the run once every frame is tracked (forward filtering–backward smoothing of
@@ -190,7 +191,7 @@ pub struct Overrides {
     /// `--parallel`.
     pub parallel: bool,
     /// `--edge-threshold`: the 1-D edge detector's threshold in grey levels per pixel, for every
-    /// measurement-line term.
+    /// measurement-line term; refused for a tracker without measurement lines.
     pub edge_threshold: Option<f32>,
 }
 
@@ -204,7 +205,8 @@ pub struct Overrides {
 /// # Errors
 /// [`AppError::InvalidSetting`] (exit 2) for an unknown preset, a configuration file that cannot
 /// be read or parsed or holds an invalid value (the file is a setting, like the options that
-/// override it), or an invalid override.
+/// override it), or an invalid override (`--edge-threshold` for a tracker without measurement
+/// lines, which would not read it).
 pub fn tracker_config(preset: &str, config: Option<&Path>, o: Overrides) -> Result<TrackerConfig> {
     let mut c = match config {
         Some(path) => {
@@ -238,12 +240,13 @@ pub fn tracker_config(preset: &str, config: Option<&Path>, o: Overrides) -> Resu
                 format!("{t} is not a finite positive number of grey levels per pixel"),
             ));
         }
-        if let Some(shape) = c.likelihood.shape.as_mut() {
-            shape.lines.edge.threshold = t;
-        }
-        if let Some(clutter) = c.likelihood.clutter.as_mut() {
-            clutter.lines.edge.threshold = t;
-        }
+        // Refused, not ignored, for a tracker without measurement lines (head).
+        c.set_edge_threshold(t).map_err(|e| match e {
+            trackers::Error::InvalidSetting { reason, .. } => {
+                AppError::setting("--edge-threshold", reason)
+            }
+            other => AppError::setting("--edge-threshold", other.to_string()),
+        })?;
         c.validate()
             .map_err(|e| AppError::setting("--edge-threshold", e.to_string()))?;
     }
