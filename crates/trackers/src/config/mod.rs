@@ -146,8 +146,12 @@ pub enum PoseEstimator {
 /// Everything that defines a tracker. Load from JSON or TOML ([`TrackerConfig::parse`]), or start
 /// from a [`Preset`].
 ///
-/// Its serialized form leaves out what the tracker does not read (see the [module](self) and
-/// [`TrackerConfig::validate`]); every section it can leave out has a default here.
+/// A configuration names the pieces it uses and nothing else: its serialized form (JSON or TOML,
+/// `track config`) leaves out every section and field the tracker does not read (`motion`
+/// without the motion proposal or motion consistency, `clutter` without Wu's likelihood, the
+/// likelihood terms that are off, `estimator` without clutter switching, …), and loading fills
+/// each in with its default, so a printed configuration parses back to itself.
+/// [`TrackerConfig::validate`] refuses an unread setting at any other value, by its dotted path.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrackerConfig {
