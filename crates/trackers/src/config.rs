@@ -8,7 +8,7 @@ use smc_core::{FilterSettings, ResamplingScheme};
 use crate::appearance::AppearanceSettings;
 use crate::dynamics::{DynamicsSettings, NoiseKind};
 use crate::observation::{ImplicitMotionSettings, LikelihoodSettings};
-use crate::reacquire::ReacquisitionSettings;
+use crate::proposal::reacquisition::ReacquisitionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
 use contour_obs::OcclusionForm;
@@ -334,7 +334,7 @@ impl TrackerConfig {
     /// # Ok::<(), trackers::Error>(())
     /// ```
     pub fn initial_ellipse(&self, e: &Ellipse) -> Result<Ellipse> {
-        crate::tracker::check_initial(e)?;
+        crate::api::check_initial(e)?;
         if self.rotates() {
             return Ok(*e);
         }

@@ -17,11 +17,12 @@
 use smc_core::smooth::SmootherSettings;
 use vision_core::{BoundingBox, Ellipse};
 
+use crate::api::{Estimate, Tracker, WeightedEllipse};
 use crate::config::TrackerConfig;
+use crate::engine::ParticleTracker;
 use crate::frame::Frame;
 use crate::smoothing::SmoothedRun;
 use crate::space::ShapeSpace;
-use crate::tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse};
 use crate::{Error, Result};
 
 /// The map between a frame's pixel coordinates and the working frame's: a frame pixel's
