@@ -401,6 +401,10 @@ pub const OCCLUSION_ARC: bool = true;
 /// the contour shrinks onto the visible sliver instead. With 0.3, γ̂ rises while the target is
 /// hidden and falls after it on every seed `tests/tracking.rs` checks; the price is the zooming
 /// `distractor` scene, where a larger σ_γ lets γ explain the mismatch of a zooming target
+/// The contour presets' shape test of a locked estimate ([`ReacquisitionSettings::shape_tolerance`]):
+/// a contour whose scale or elongation departs from the remembered one by more than this
+/// log-ratio is not a confident lock (w-eval's α̂ stays locked on a sliver of an occluded target).
+pub const CONTOUR_SHAPE_TOLERANCE: f64 = 0.15;
 /// `head`'s ESS floor after weighting, as a fraction of N ([`FilterSettings::min_ess_fraction`]):
 /// the template scores the true face tens of nats above its surroundings, which untempered would
 /// leave one particle to resample from.
@@ -696,7 +700,10 @@ impl Preset {
             },
             Preset::WOcc => TrackerConfig {
                 likelihood: occlusion_likelihood.clone(),
-                reacquisition: Some(ReacquisitionSettings::default()),
+                reacquisition: Some(ReacquisitionSettings {
+                    shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
+                    ..ReacquisitionSettings::default()
+                }),
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::RandomWalk(OcclusionConfig {
                     sigma_gamma: W_OCC_SIGMA_GAMMA,
@@ -706,7 +713,10 @@ impl Preset {
             },
             Preset::WEval => TrackerConfig {
                 likelihood: occlusion_likelihood,
-                reacquisition: Some(ReacquisitionSettings::default()),
+                reacquisition: Some(ReacquisitionSettings {
+                    shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
+                    ..ReacquisitionSettings::default()
+                }),
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::Status(StatusConfig::default()),
                 ..wu
@@ -731,7 +741,10 @@ impl Preset {
                 },
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::Status(StatusConfig::default()),
-                reacquisition: Some(ReacquisitionSettings::default()),
+                reacquisition: Some(ReacquisitionSettings {
+                    shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
+                    ..ReacquisitionSettings::default()
+                }),
                 ..base
             },
             Preset::Head => TrackerConfig {
@@ -744,10 +757,7 @@ impl Preset {
                 working_radius: Some(HEAD_WORKING_RADIUS),
                 // The lock chain alone says whether the target is held: a face that grows as it
                 // nears the camera is not lost.
-                reacquisition: Some(ReacquisitionSettings {
-                    shape_tolerance: None,
-                    ..ReacquisitionSettings::default()
-                }),
+                reacquisition: Some(ReacquisitionSettings::default()),
                 ..base
             },
         }

@@ -78,9 +78,10 @@ pub use api::{Estimate, Tracker, WeightedEllipse, status_from_gamma};
 pub use appearance::AppearanceSettings;
 pub use build::{build, build_preset, build_with_terms};
 pub use config::{
-    AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, ClutterMode, ConfigFormat, DEFAULT_PARTICLES,
-    DEFAULT_SEED, MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings, OCCLUSION_ARC,
-    OcclusionMode, PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig,
+    AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, CONTOUR_SHAPE_TOLERANCE, ClutterMode,
+    ConfigFormat, DEFAULT_PARTICLES, DEFAULT_SEED, HEAD_MIN_ESS_FRACTION, HEAD_WORKING_RADIUS,
+    MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings, OCCLUSION_ARC, OcclusionMode,
+    PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig,
     UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA,
 };
 pub use dynamics::{DynamicsSettings, NoiseKind};

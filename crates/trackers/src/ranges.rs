@@ -229,6 +229,7 @@ pub const SETTING_RANGES: &[SettingRange] = &[
         ..closed("appearance.lock_persistence", 0.5, 1.0)
     },
     closed("appearance.max_detection_centres", 1.0, 1e6),
+    closed("appearance.calibration_scales", 0.5, 2.0),
 ];
 
 /// The entry for a concrete path (`a.b[1][2]`): its own entry, or the list's (`a.b`).

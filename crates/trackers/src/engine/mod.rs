@@ -237,22 +237,6 @@ impl ParticleTracker {
     pub(crate) fn frames_done(&self) -> usize {
         self.frame
     }
-
-    fn check_frame(&self, frame: &Frame<'_>) -> Result<()> {
-        if (frame.width(), frame.height()) != self.size {
-            return Err(Error::BadFrame {
-                frame: self.frame + 1,
-                reason: format!(
-                    "{}×{} differs from the first frame's {}×{}",
-                    frame.width(),
-                    frame.height(),
-                    self.size.0,
-                    self.size.1
-                ),
-            });
-        }
-        Ok(())
-    }
 }
 
 impl Tracker for ParticleTracker {
@@ -336,7 +320,7 @@ impl Tracker for ParticleTracker {
         if self.set.is_none() {
             return Err(Error::NotInitialised);
         }
-        self.check_frame(&frame)?;
+        frame.check_size(self.size, self.frame + 1)?;
         let step = self.frame as u64 + 1;
         let seed = self.config.seed;
         let resampled = {
