@@ -162,21 +162,27 @@ fn grey_frames_work_too() {
     assert!(mean > 0.6, "mean IoU {mean:.3}");
 }
 
+/// A tracker of `config` started on the moving target's first frame, and its estimate of the
+/// second.
+fn first_update(
+    config: trackers::TrackerConfig,
+) -> (Box<dyn trackers::Tracker>, trackers::Estimate) {
+    let mut tracker = build(config).unwrap();
+    let first = target_at(0, &(0..0)).unwrap();
+    let (g, c) = render(Some(first));
+    tracker
+        .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
+        .unwrap();
+    let (g, c) = render(target_at(1, &(0..0)));
+    let e = tracker
+        .update(Frame::with_rgb(W, H, &g, &c).unwrap())
+        .unwrap();
+    (tracker, e)
+}
+
 #[test]
 fn same_seed_same_output_and_bad_input_is_an_error() {
-    let run = |seed| {
-        let mut tracker = build(Preset::Head.config(100, seed)).unwrap();
-        let first = target_at(0, &(0..0)).unwrap();
-        let (g, c) = render(Some(first));
-        tracker
-            .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
-            .unwrap();
-        let (g, c) = render(target_at(1, &(0..0)));
-        tracker
-            .update(Frame::with_rgb(W, H, &g, &c).unwrap())
-            .unwrap()
-            .bbox
-    };
+    let run = |seed| first_update(Preset::Head.config(100, seed)).1.bbox;
     assert_eq!(run(5), run(5));
     let mut tracker = build(Preset::Head.config(100, 1)).unwrap();
     let (g, c) = render(None);
@@ -284,16 +290,7 @@ fn the_same_output_for_one_thread_or_many_and_sequentially() {
 #[test]
 fn particles_diagnostics_and_tempering_are_reported() {
     for seed in [1, 2, 3] {
-        let mut tracker = build(Preset::Head.config(120, seed)).unwrap();
-        let first = target_at(0, &(0..0)).unwrap();
-        let (g, c) = render(Some(first));
-        tracker
-            .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
-            .unwrap();
-        let (g, c) = render(target_at(1, &(0..0)));
-        let e = tracker
-            .update(Frame::with_rgb(W, H, &g, &c).unwrap())
-            .unwrap();
+        let (tracker, e) = first_update(Preset::Head.config(120, seed));
         let d = e
             .diagnostics
             .expect("head reports the filter's diagnostics");

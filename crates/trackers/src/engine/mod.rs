@@ -385,15 +385,7 @@ impl Tracker for ParticleTracker {
         self.previous.extend_from_slice(frame.data());
         let mut report = self.report(state, 0.0)?;
         report.ess = weighted.ess;
-        report.diagnostics = Some(StepDiagnostics {
-            ess: resampled.ess,
-            resampled: resampled.resampled,
-            distinct_ancestors: resampled.distinct_ancestors,
-            max_weight: weighted.max_weight,
-            log_evidence_increment: weighted.log_evidence_increment,
-            ess_after: weighted.ess,
-            tempering_exponent: weighted.exponent,
-        });
+        report.diagnostics = Some(StepDiagnostics::of(&resampled, &weighted));
         report.clutter = clutter;
         report.gamma = gamma;
         report.status = match (status, visibility) {
