@@ -154,6 +154,21 @@ pub struct StepDiagnostics {
     pub tempering_exponent: f64,
 }
 
+impl StepDiagnostics {
+    /// The diagnostics of a step from the reports of its resampling and weighting stages.
+    pub fn of(resampled: &ResampleReport, weighted: &WeightReport) -> Self {
+        Self {
+            ess: resampled.ess,
+            resampled: resampled.resampled,
+            distinct_ancestors: resampled.distinct_ancestors,
+            max_weight: weighted.max_weight,
+            log_evidence_increment: weighted.log_evidence_increment,
+            ess_after: weighted.ess,
+            tempering_exponent: weighted.exponent,
+        }
+    }
+}
+
 /// A particle filter: settings plus the reusable buffers of a step.
 ///
 /// # Examples
@@ -430,8 +445,8 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
 
     /// The weighting of [`ParticleFilter::weight`] with a tempered likelihood
     /// ([`FilterSettings::min_ess_fraction`], [`crate::temper`]): the log-likelihoods are first
-    /// multiplied by the largest exponent φ ∈ (0, 1] that keeps the conditional effective sample size of the
-    /// updated weights at or above `min_ess`. Only the likelihood is tempered: the previous
+    /// multiplied by the largest exponent φ ∈ (0, 1] that keeps the conditional effective sample
+    /// size of the updated weights at or above `min_ess`. Only the likelihood is tempered: the previous
     /// weights and the prior-over-proposal ratio enter at full strength.
     fn temper_and_weight<P, D>(
         &mut self,
@@ -572,15 +587,7 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
         let resampled = self.resample_if_needed(set, resampler, seed, step)?;
         self.propagate(set, proposal, seed, step);
         let weighted = self.weight(set, proposal, prior, observation, step)?;
-        Ok(StepDiagnostics {
-            ess: resampled.ess,
-            resampled: resampled.resampled,
-            distinct_ancestors: resampled.distinct_ancestors,
-            max_weight: weighted.max_weight,
-            log_evidence_increment: weighted.log_evidence_increment,
-            ess_after: weighted.ess,
-            tempering_exponent: weighted.exponent,
-        })
+        Ok(StepDiagnostics::of(&resampled, &weighted))
     }
 
     /// A bootstrap (CONDENSATION) step: the dynamics are the proposal, the weight is the

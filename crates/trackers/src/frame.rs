@@ -58,6 +58,27 @@ where
 }
 
 impl<'a> Frame<'a> {
+    /// An error unless this frame has the size `first` of the track's first frame; `index` is
+    /// the number the error gives this frame.
+    ///
+    /// # Errors
+    /// [`Error::BadFrame`] naming both sizes.
+    pub fn check_size(&self, first: (usize, usize), index: usize) -> Result<()> {
+        if (self.width(), self.height()) == first {
+            return Ok(());
+        }
+        Err(Error::BadFrame {
+            frame: index,
+            reason: format!(
+                "{}×{} differs from the first frame's {}×{}",
+                self.width(),
+                self.height(),
+                first.0,
+                first.1
+            ),
+        })
+    }
+
     /// Wraps `data` as a grey frame ([`GreyImage::new`]).
     ///
     /// # Errors

@@ -56,42 +56,43 @@
 #[doc = include_str!("../README.md")]
 mod readme_doctest {}
 
+mod api;
 pub mod appearance;
+mod build;
 mod cluster;
 mod config;
 mod dynamics;
+mod engine;
 mod error;
 mod frame;
 mod monitor;
 pub mod observation;
 mod particle;
-mod proposal;
-mod reacquire;
+pub mod proposal;
 pub mod smoothing;
 mod space;
-mod tracker;
-pub mod working_scale;
+pub use engine::scale as working_scale;
 
+pub use api::{Estimate, Tracker, WeightedEllipse, status_from_gamma};
 pub use appearance::AppearanceSettings;
+pub use build::{build, build_preset, build_with_terms};
 pub use config::{
-    AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, ClutterMode, ConfigFormat, DEFAULT_PARTICLES,
-    DEFAULT_SEED, FIXED_LAMBDA, HEAD_MIN_ESS_FRACTION, HEAD_WORKING_RADIUS, MAX_CLUSTER_ITERATIONS,
-    MAX_PARTICLES, MotionSettings, OCCLUSION_ARC, OcclusionMode, PoseEstimator, Preset,
-    ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig, UNKNOWN_OCCLUDER_SHARE,
-    W_OCC_SIGMA_GAMMA, ranges,
+    AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, CONTOUR_SHAPE_TOLERANCE, ClutterMode,
+    ConfigFormat, DEFAULT_PARTICLES, DEFAULT_SEED, FIXED_LAMBDA, HEAD_MIN_ESS_FRACTION,
+    HEAD_WORKING_RADIUS, MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings, OCCLUSION_ARC,
+    OcclusionMode, PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig,
+    UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA, ranges,
 };
 pub use dynamics::{DynamicsSettings, NoiseKind};
+pub use engine::ParticleTracker;
 pub use error::{Error, Result};
 pub use frame::{Frame, FrameBuf};
 pub use observation::{FrameContext, ImplicitMotionSettings, LikelihoodSettings, ObservationTerm};
 pub use particle::Particle;
-pub use reacquire::ReacquisitionSettings;
+pub use proposal::reacquisition::ReacquisitionSettings;
 pub use smc_core::smooth::SmootherSettings;
 pub use smoothing::{ChainCounts, SmoothedRun, SwitchingStatistics};
 pub use space::{STATE_SLOTS, ShapeSpace, StateVector};
-pub use tracker::{
-    Estimate, ParticleTracker, Tracker, WeightedEllipse, build, build_with_terms, status_from_gamma,
-};
 pub use working_scale::{ScaledTracker, WorkingScale};
 
 // The types of `Estimate`'s public fields, and of a tracker's inputs, so that a user needs no
@@ -107,12 +108,4 @@ pub mod prelude {
         StatusEstimate, StepDiagnostics, ToGreyBuffer, TrackStatus, Tracker, TrackerConfig, build,
         build_preset,
     };
-}
-
-/// Builds a preset by name with `particles` particles and `seed`.
-///
-/// # Errors
-/// [`Error::UnknownPreset`] or an invalid configuration.
-pub fn build_preset(name: &str, particles: usize, seed: u64) -> Result<Box<dyn Tracker>> {
-    build(Preset::from_name(name)?.config(particles, seed))
 }

@@ -162,21 +162,27 @@ fn grey_frames_work_too() {
     assert!(mean > 0.6, "mean IoU {mean:.3}");
 }
 
+/// A tracker of `config` started on the moving target's first frame, and its estimate of the
+/// second.
+fn first_update(
+    config: trackers::TrackerConfig,
+) -> (Box<dyn trackers::Tracker>, trackers::Estimate) {
+    let mut tracker = build(config).unwrap();
+    let first = target_at(0, &(0..0)).unwrap();
+    let (g, c) = render(Some(first));
+    tracker
+        .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
+        .unwrap();
+    let (g, c) = render(target_at(1, &(0..0)));
+    let e = tracker
+        .update(Frame::with_rgb(W, H, &g, &c).unwrap())
+        .unwrap();
+    (tracker, e)
+}
+
 #[test]
 fn same_seed_same_output_and_bad_input_is_an_error() {
-    let run = |seed| {
-        let mut tracker = build(Preset::Head.config(100, seed)).unwrap();
-        let first = target_at(0, &(0..0)).unwrap();
-        let (g, c) = render(Some(first));
-        tracker
-            .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
-            .unwrap();
-        let (g, c) = render(target_at(1, &(0..0)));
-        tracker
-            .update(Frame::with_rgb(W, H, &g, &c).unwrap())
-            .unwrap()
-            .bbox
-    };
+    let run = |seed| first_update(Preset::Head.config(100, seed)).1.bbox;
     assert_eq!(run(5), run(5));
     let mut tracker = build(Preset::Head.config(100, 1)).unwrap();
     let (g, c) = render(None);
@@ -240,5 +246,72 @@ fn a_tight_annotation_keeps_its_convention() {
             "seed {seed}: reported boxes are {:.3}× the annotation's size on average",
             mean.exp()
         );
+    }
+}
+
+/// The estimates of a 25-frame run of `config` on the moving target, every field.
+fn estimates(config: trackers::TrackerConfig) -> Vec<String> {
+    let mut tracker = build(config).unwrap();
+    let first = target_at(0, &(0..0)).unwrap();
+    let (g, c) = render(Some(first));
+    tracker
+        .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
+        .unwrap();
+    (1..25)
+        .map(|k| {
+            let (g, c) = render(target_at(k, &(0..0)));
+            let mut e = tracker
+                .update(Frame::with_rgb(W, H, &g, &c).unwrap())
+                .unwrap();
+            e.millis = 0.0;
+            format!("{e:?}")
+        })
+        .collect()
+}
+
+#[test]
+fn the_same_output_for_one_thread_or_many_and_sequentially() {
+    for seed in [1, 2] {
+        let sequential = estimates(Preset::Head.config(150, seed));
+        let mut parallel = Preset::Head.config(150, seed);
+        parallel.filter.parallel = true;
+        parallel.filter.parallel_min_chunk = 8;
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let run = pool.install(|| estimates(parallel.clone()));
+            assert_eq!(run, sequential, "seed {seed}, {threads} threads");
+        }
+    }
+}
+
+#[test]
+fn particles_diagnostics_and_tempering_are_reported() {
+    for seed in [1, 2, 3] {
+        let (tracker, e) = first_update(Preset::Head.config(120, seed));
+        let d = e
+            .diagnostics
+            .expect("head reports the filter's diagnostics");
+        // Tempering keeps the ESS at its floor of 0.3 N (the template is sharp).
+        assert!(
+            d.ess_after >= 0.3 * 120.0 * (1.0 - 1e-9),
+            "seed {seed}: {d:?}"
+        );
+        assert!(d.tempering_exponent > 0.0 && d.tempering_exponent <= 1.0);
+        assert!((e.ess - d.ess_after).abs() < 1e-9);
+        // The particles carry their weights after weighting, heaviest first, and sum to one.
+        let all = tracker.particles(usize::MAX);
+        assert_eq!(all.len(), 120);
+        assert!(all.windows(2).all(|w| w[0].weight >= w[1].weight));
+        assert!(
+            all[0].weight > all[119].weight,
+            "seed {seed}: equal weights"
+        );
+        let total: f64 = all.iter().map(|p| p.weight).sum();
+        assert!((total - 1.0).abs() < 1e-9);
+        // The state is the tracked pose, not zeros.
+        assert!(e.state.iter().take(4).all(|v| v.is_finite() && *v != 0.0));
     }
 }

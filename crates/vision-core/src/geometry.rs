@@ -23,6 +23,53 @@ pub struct Ellipse {
 }
 
 impl Ellipse {
+    /// The mean absolute difference across the contour: at `points` points evenly spaced in
+    /// the ellipse's parameter, the value `offset` pixels outside the contour along its normal
+    /// against the value `offset` pixels inside, read by `sample` (`None` where there is nothing
+    /// to read, as outside an image). Returns the mean over the points read and their number
+    /// (0 and 0 when none is). Birchfield 1998's perimeter gradient, without its normalisation.
+    ///
+    /// # Examples
+    /// ```
+    /// use vision_core::Ellipse;
+    /// // A disc of value 1 on 0: a contrast of 1 everywhere on its contour.
+    /// let e = Ellipse::new(0.0, 0.0, 10.0, 6.0, 0.3);
+    /// let inside = |x: f64, y: f64| {
+    ///     let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+    ///     let (u, v) = ((c * x + s * y) / 10.0, (-s * x + c * y) / 6.0);
+    ///     Some(if u * u + v * v <= 1.0 { 1.0 } else { 0.0 })
+    /// };
+    /// let (mean, n) = e.contrast_across(32, 1.0, inside);
+    /// assert_eq!(n, 32);
+    /// assert!((mean - 1.0).abs() < 1e-12);
+    /// ```
+    pub fn contrast_across(
+        &self,
+        points: usize,
+        offset: f64,
+        sample: impl Fn(f64, f64) -> Option<f64>,
+    ) -> (f64, usize) {
+        let (c, s) = (self.angle.cos(), self.angle.sin());
+        let (mut sum, mut n) = (0.0, 0);
+        for k in 0..points {
+            let t = std::f64::consts::TAU * k as f64 / points as f64;
+            let (u, v) = (self.a * t.cos(), self.b * t.sin());
+            let (px, py) = (self.cx + c * u - s * v, self.cy + s * u + c * v);
+            // The normal of the ellipse at t, in image coordinates.
+            let (nu, nv) = (self.b * t.cos(), self.a * t.sin());
+            let norm = (nu * nu + nv * nv).sqrt().max(1e-12);
+            let (nx, ny) = ((c * nu - s * nv) / norm, (s * nu + c * nv) / norm);
+            if let (Some(inner), Some(outer)) = (
+                sample(px - offset * nx, py - offset * ny),
+                sample(px + offset * nx, py + offset * ny),
+            ) {
+                sum += (inner - outer).abs();
+                n += 1;
+            }
+        }
+        (if n > 0 { sum / n as f64 } else { 0.0 }, n)
+    }
+
     /// An ellipse from its five parameters.
     pub fn new(cx: f64, cy: f64, a: f64, b: f64, angle: f64) -> Self {
         Self {

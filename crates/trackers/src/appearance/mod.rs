@@ -177,7 +177,7 @@ impl Appearance {
                 reason: format!(
                     "{} covers no pixel of the frame or leaves no background around it in the \
                      frame; start from a smaller box inside the frame",
-                    crate::tracker::describe(e)
+                    crate::api::describe(e)
                 ),
             });
         };

@@ -33,8 +33,6 @@ pub struct WorkingWindow {
     integral_positive: Vec<f64>,
     /// Mean gradient magnitude of the grey window (the edge term's unit).
     mean_gradient: f64,
-    /// (cos t, sin t) of the points [`WorkingWindow::edge_strength`] reads, filled once.
-    circle: Vec<[f64; 2]>,
 }
 
 impl WorkingWindow {
@@ -48,12 +46,6 @@ impl WorkingWindow {
         let x1 = rect[2].clamp(x0 + 1.0, fw);
         let y1 = rect[3].clamp(y0 + 1.0, fh);
         let step = step.max(1.0);
-        if self.circle.is_empty() {
-            self.circle.extend((0..CONTOUR_POINTS).map(|k| {
-                let t = std::f64::consts::TAU * k as f64 / CONTOUR_POINTS as f64;
-                [t.cos(), t.sin()]
-            }));
-        }
         self.origin = [x0, y0];
         self.step = step;
         self.width = (((x1 - x0) / step).ceil() as usize).max(1);
@@ -256,25 +248,20 @@ impl WorkingWindow {
         )?)
     }
 
-    /// Contrast across the contour: the mean, over points of the ellipse, of the absolute grey
-    /// difference one working pixel inside and outside along the normal, in units of the
-    /// window's mean gradient magnitude (Birchfield 1998's perimeter gradient, normalised).
+    /// Contrast across the contour: the mean, over [`CONTOUR_POINTS`] points of the ellipse
+    /// (axis-aligned), of half the absolute grey difference one working pixel inside and outside
+    /// along the normal ([`Ellipse::contrast_across`], read bilinearly), in units of the window's
+    /// mean gradient magnitude (Birchfield 1998's perimeter gradient, normalised).
     pub fn edge_strength(&self, e: &Ellipse) -> f64 {
         let (cx, cy, a, b) = self.to_working(e);
         if a <= 0.0 || b <= 0.0 {
             return 0.0;
         }
-        let mut sum = 0.0;
-        for &[c, s] in &self.circle {
-            let (px, py) = (cx + a * c, cy + b * s);
-            let (nx, ny) = (c / a, s / b);
-            let norm = (nx * nx + ny * ny).sqrt();
-            let (nx, ny) = (nx / norm, ny / norm);
-            let outside = self.grey_at(px + nx, py + ny);
-            let inside = self.grey_at(px - nx, py - ny);
-            sum += f64::from((outside - inside).abs()) * 0.5;
-        }
-        sum / self.circle.len().max(1) as f64 / (self.mean_gradient + 1.0)
+        let working = Ellipse::new(cx, cy, a, b, 0.0);
+        let (mean, _) = working.contrast_across(CONTOUR_POINTS, 1.0, |x, y| {
+            Some(f64::from(self.grey_at(x, y)))
+        });
+        0.5 * mean / (self.mean_gradient + 1.0)
     }
 
     fn grey_at(&self, x: f64, y: f64) -> f32 {

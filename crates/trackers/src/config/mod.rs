@@ -15,7 +15,7 @@ use smc_core::{FilterSettings, ResamplingScheme};
 use crate::appearance::AppearanceSettings;
 use crate::dynamics::DynamicsSettings;
 use crate::observation::LikelihoodSettings;
-use crate::reacquire::ReacquisitionSettings;
+use crate::proposal::reacquisition::ReacquisitionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
 use vision_core::Ellipse;
@@ -29,8 +29,9 @@ mod unread;
 pub use parse::ConfigFormat;
 
 pub use presets::{
-    CLUTTER_LINE_FRACTION, FIXED_LAMBDA, HEAD_MIN_ESS_FRACTION, HEAD_WORKING_RADIUS, OCCLUSION_ARC,
-    Preset, SHAPE_VELOCITY_RETENTION, UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA,
+    CLUTTER_LINE_FRACTION, CONTOUR_SHAPE_TOLERANCE, FIXED_LAMBDA, HEAD_MIN_ESS_FRACTION,
+    HEAD_WORKING_RADIUS, OCCLUSION_ARC, Preset, SHAPE_VELOCITY_RETENTION, UNKNOWN_OCCLUDER_SHARE,
+    W_OCC_SIGMA_GAMMA,
 };
 
 /// Settings of Odobez's motion proposal (Eq. 16) and of the motion estimates behind p_c1.
@@ -384,7 +385,7 @@ impl TrackerConfig {
     /// # Ok::<(), trackers::Error>(())
     /// ```
     pub fn initial_ellipse(&self, e: &Ellipse) -> Result<Ellipse> {
-        crate::tracker::check_initial(e)?;
+        crate::api::check_initial(e)?;
         if self.rotates() {
             return Ok(*e);
         }

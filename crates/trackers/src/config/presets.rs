@@ -12,7 +12,7 @@ use super::{
 use crate::appearance::AppearanceSettings;
 use crate::dynamics::{DynamicsSettings, NoiseKind};
 use crate::observation::{ImplicitMotionSettings, LikelihoodSettings};
-use crate::reacquire::ReacquisitionSettings;
+use crate::proposal::reacquisition::ReacquisitionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
 use contour_obs::OcclusionForm;
@@ -220,7 +220,10 @@ impl Preset {
             },
             Preset::WOcc => TrackerConfig {
                 likelihood: occlusion_likelihood.clone(),
-                reacquisition: Some(ReacquisitionSettings::default()),
+                reacquisition: Some(ReacquisitionSettings {
+                    shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
+                    ..ReacquisitionSettings::default()
+                }),
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::RandomWalk(OcclusionConfig {
                     sigma_gamma: W_OCC_SIGMA_GAMMA,
@@ -230,7 +233,10 @@ impl Preset {
             },
             Preset::WEval => TrackerConfig {
                 likelihood: occlusion_likelihood,
-                reacquisition: Some(ReacquisitionSettings::default()),
+                reacquisition: Some(ReacquisitionSettings {
+                    shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
+                    ..ReacquisitionSettings::default()
+                }),
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::Status(StatusConfig::default()),
                 ..wu
@@ -255,7 +261,10 @@ impl Preset {
                 },
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::Status(StatusConfig::default()),
-                reacquisition: Some(ReacquisitionSettings::default()),
+                reacquisition: Some(ReacquisitionSettings {
+                    shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
+                    ..ReacquisitionSettings::default()
+                }),
                 ..base
             },
             Preset::Head => TrackerConfig {
@@ -268,10 +277,7 @@ impl Preset {
                 working_radius: Some(HEAD_WORKING_RADIUS),
                 // The lock chain alone says whether the target is held: a face that grows as it
                 // nears the camera is not lost.
-                reacquisition: Some(ReacquisitionSettings {
-                    shape_tolerance: None,
-                    ..ReacquisitionSettings::default()
-                }),
+                reacquisition: Some(ReacquisitionSettings::default()),
                 ..base
             },
         }
@@ -334,6 +340,11 @@ pub const OCCLUSION_ARC: bool = true;
 /// `distractor` scene, where a larger σ_γ lets γ explain the mismatch of a zooming target
 /// (docs/RESULTS.md, decision log).
 pub const W_OCC_SIGMA_GAMMA: f64 = 0.3;
+
+/// The contour presets' shape test of a locked estimate ([`ReacquisitionSettings::shape_tolerance`]):
+/// a contour whose scale or elongation departs from the remembered one by more than this
+/// log-ratio is not a confident lock (w-eval's α̂ stays locked on a sliver of an occluded target).
+pub const CONTOUR_SHAPE_TOLERANCE: f64 = 0.15;
 
 /// `head`'s ESS floor after weighting, as a fraction of N ([`FilterSettings::min_ess_fraction`]):
 /// the template scores the true face tens of nats above its surroundings, which untempered would

@@ -91,34 +91,15 @@ pub fn fuse(status: &StatusEstimate, unseen: f64) -> StatusEstimate {
 /// Points read on a contour by [`edge_saliency`].
 const CONTOUR_POINTS: usize = 48;
 
-/// Mean absolute grey-level difference across the ellipse `e` (inside against outside, one
-/// pixel either side of the contour along its normal) at [`CONTOUR_POINTS`] points, and how
-/// many of them fell inside the frame.
+/// Mean absolute grey-level difference across the ellipse `e` (inside against outside, one and
+/// a half pixels either side of the contour along its normal, nearest pixel) at
+/// [`CONTOUR_POINTS`] points, and how many of them fell inside the frame.
 fn contour_contrast(grey: &[f32], (w, h): (usize, usize), e: &Ellipse) -> (f64, usize) {
-    let (c, s) = (e.angle.cos(), e.angle.sin());
-    let at = |x: f64, y: f64| -> Option<f64> {
+    e.contrast_across(CONTOUR_POINTS, 1.5, |x, y| {
         let (i, j) = (x.round(), y.round());
         (i >= 0.0 && j >= 0.0 && (i as usize) < w && (j as usize) < h)
             .then(|| f64::from(grey[j as usize * w + i as usize]))
-    };
-    let (mut sum, mut n) = (0.0, 0);
-    for k in 0..CONTOUR_POINTS {
-        let t = std::f64::consts::TAU * k as f64 / CONTOUR_POINTS as f64;
-        let (u, v) = (e.a * t.cos(), e.b * t.sin());
-        let (px, py) = (e.cx + c * u - s * v, e.cy + s * u + c * v);
-        // The normal of the ellipse at t, in the frame.
-        let (nu, nv) = (e.b * t.cos(), e.a * t.sin());
-        let norm = (nu * nu + nv * nv).sqrt().max(1e-12);
-        let (nx, ny) = ((c * nu - s * nv) / norm, (s * nu + c * nv) / norm);
-        let d = 1.5;
-        if let (Some(inner), Some(outer)) =
-            (at(px - d * nx, py - d * ny), at(px + d * nx, py + d * ny))
-        {
-            sum += (inner - outer).abs();
-            n += 1;
-        }
-    }
-    (if n > 0 { sum / n as f64 } else { 0.0 }, n)
+    })
 }
 
 /// The z-score of the contrast across the estimate's contour against the same contour moved to

@@ -2,7 +2,7 @@
 //! background log-ratios summed inside the contour, less the target-like evidence just outside
 //! it ([`crate::appearance::window::WorkingWindow::contrast`]).
 
-use super::{FrameContext, ObservationTerm};
+use super::{FrameContext, ObservationTerm, add_appearance_measure};
 use crate::particle::Particle;
 
 /// The colour contrast, `weight` nats per unit.
@@ -23,14 +23,8 @@ impl ObservationTerm for ColourContrast {
         particles: &[Particle],
         out: &mut [f64],
     ) {
-        let Some(appearance) = frame.appearance else {
-            return;
-        };
-        for (p, o) in particles.iter().zip(out) {
-            *o += match frame.ellipse(p) {
-                Some(e) => self.weight * appearance.colour_contrast(&e),
-                None => f64::NEG_INFINITY,
-            };
-        }
+        add_appearance_measure(frame, particles, out, self.weight, |a, e| {
+            Some(a.colour_contrast(e))
+        });
     }
 }

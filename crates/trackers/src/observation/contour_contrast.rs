@@ -2,7 +2,7 @@
 //! across the contour along its normals, in units of the window's mean gradient (Birchfield
 //! 1998's perimeter gradient, normalised; [`crate::appearance::window::WorkingWindow::edge_strength`]).
 
-use super::{FrameContext, ObservationTerm};
+use super::{FrameContext, ObservationTerm, add_appearance_measure};
 use crate::particle::Particle;
 
 /// The contour contrast, `weight` nats per unit.
@@ -23,14 +23,8 @@ impl ObservationTerm for ContourContrast {
         particles: &[Particle],
         out: &mut [f64],
     ) {
-        let Some(appearance) = frame.appearance else {
-            return;
-        };
-        for (p, o) in particles.iter().zip(out) {
-            *o += match frame.ellipse(p) {
-                Some(e) => self.weight * appearance.contour_contrast(&e),
-                None => f64::NEG_INFINITY,
-            };
-        }
+        add_appearance_measure(frame, particles, out, self.weight, |a, e| {
+            Some(a.contour_contrast(e))
+        });
     }
 }

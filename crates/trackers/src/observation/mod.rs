@@ -183,6 +183,26 @@ impl<'a> FrameContext<'a> {
     }
 }
 
+/// Adds `weight` times `measure(appearance, ellipse)` to every particle's log-likelihood (−∞ for a
+/// particle whose contour is not finite or that `measure` cannot score): the loop of the
+/// appearance terms. Without an appearance model (a term built by hand on a tracker without
+/// one) it adds nothing.
+fn add_appearance_measure(
+    frame: &FrameContext<'_>,
+    particles: &[Particle],
+    out: &mut [f64],
+    weight: f64,
+    mut measure: impl FnMut(&Appearance, &vision_core::Ellipse) -> Option<f64>,
+) {
+    let Some(appearance) = frame.appearance else {
+        return;
+    };
+    for (p, o) in particles.iter().zip(out) {
+        let value = frame.ellipse(p).and_then(|e| measure(appearance, &e));
+        *o += value.map_or(f64::NEG_INFINITY, |v| weight * v);
+    }
+}
+
 /// The terms a configuration enables, in a fixed order (shape, clutter, implicit motion, motion
 /// consistency, colour contrast, template, contour contrast), then any of the user's.
 #[derive(Debug, Default)]

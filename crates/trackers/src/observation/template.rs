@@ -2,7 +2,7 @@
 //! cross-correlation ρ (Odobez Eq. 23) between the grey patch under the contour and the
 //! target's template.
 
-use super::{FrameContext, ObservationTerm};
+use super::{FrameContext, ObservationTerm, add_appearance_measure};
 use crate::particle::Particle;
 
 /// ρ, `weight` nats per unit.
@@ -23,15 +23,9 @@ impl ObservationTerm for TemplateMatch {
         particles: &[Particle],
         out: &mut [f64],
     ) {
-        let Some(appearance) = frame.appearance else {
-            return;
-        };
-        let mut samples = appearance.samples();
-        for (p, o) in particles.iter().zip(out) {
-            let rho = frame
-                .ellipse(p)
-                .and_then(|e| appearance.template_similarity(&e, &mut samples));
-            *o += rho.map_or(f64::NEG_INFINITY, |r| self.weight * r);
-        }
+        let mut samples = frame.appearance.map(|a| a.samples()).unwrap_or_default();
+        add_appearance_measure(frame, particles, out, self.weight, |a, e| {
+            a.template_similarity(e, &mut samples)
+        });
     }
 }

@@ -17,12 +17,13 @@
 use smc_core::smooth::SmootherSettings;
 use vision_core::{BoundingBox, Ellipse};
 
+use crate::Result;
+use crate::api::{Estimate, Tracker, WeightedEllipse};
 use crate::config::TrackerConfig;
+use crate::engine::ParticleTracker;
 use crate::frame::Frame;
 use crate::smoothing::SmoothedRun;
 use crate::space::ShapeSpace;
-use crate::tracker::{Estimate, ParticleTracker, Tracker, WeightedEllipse};
-use crate::{Error, Result};
 
 /// The map between a frame's pixel coordinates and the working frame's: a frame pixel's
 /// coordinate x is `(x_w + 0.5)·factor − 0.5` of the working frame's x_w (pixel centres at
@@ -267,18 +268,8 @@ impl ScaledTracker {
         if self.scale.is_identity() {
             return step(&mut self.inner, frame);
         }
-        let (w, h) = self.shrinker.size;
-        if (frame.width(), frame.height()) != (w, h) {
-            return Err(Error::BadFrame {
-                // Only updates can meet a frame of another size (init sets the size).
-                frame: self.inner.frames_done() + 1,
-                reason: format!(
-                    "{}×{} differs from the first frame's {w}×{h}",
-                    frame.width(),
-                    frame.height()
-                ),
-            });
-        }
+        // Only updates can meet a frame of another size (init sets the size).
+        frame.check_size(self.shrinker.size, self.inner.frames_done() + 1)?;
         let (ow, oh) = self.shrinker.out;
         // Colour is shrunk only for a tracker that reads it (the appearance terms).
         let colour = frame

@@ -226,33 +226,12 @@ impl smc_core::Proposal for MotionProposal<'_> {
     }
 
     /// The density of the particle's component: the jump (share η, identical to the prior's, see
-    /// [`crate::reacquire`]) or the continuation below, times 1 − η; less the hidden chains'
+    /// [`crate::proposal::reacquisition`]) or the continuation below, times 1 − η; less the hidden chains'
     /// exploration ratio ([`TrackerDynamics::log_hidden_exploration_ratio`], 0 by default).
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
         self.dynamics.log_with_jump(previous, next, || {
             self.log_continuation_density(previous, next)
         }) - self.dynamics.log_hidden_exploration_ratio(previous, next)
-    }
-}
-
-/// The prior as the proposal when its hidden chains explore
-/// ([`crate::DynamicsSettings::hidden_exploration`] > 0): draws as the prior does, and its density
-/// is the prior's kinematic density less the exploration ratio, so that Eq. 3's weight is the
-/// likelihood times `T / q` of the hidden chains. With ε = 0 the trackers use
-/// [`smc_core::Bootstrap`] instead, whose densities cancel unevaluated.
-#[derive(Debug, Clone, Copy)]
-pub struct ExploringPrior<'a>(pub &'a TrackerDynamics);
-
-impl smc_core::Proposal for ExploringPrior<'_> {
-    type State = Particle;
-
-    fn sample<R: Rng + ?Sized>(&self, _index: usize, previous: &Particle, rng: &mut R) -> Particle {
-        smc_core::Dynamics::sample(self.0, previous, rng)
-    }
-
-    fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
-        smc_core::Dynamics::log_density(self.0, previous, next)
-            - self.0.log_hidden_exploration_ratio(previous, next)
     }
 }
 
@@ -282,6 +261,7 @@ impl MotionProposal<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::proposal::ExploringPrior;
 
     #[test]
     fn affine_increment_matches_a_direct_warp() {

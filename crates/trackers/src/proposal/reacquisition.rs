@@ -39,11 +39,11 @@ pub struct ReacquisitionSettings {
     /// ... and while its scale and elongation are within this log-ratio of the remembered ones:
     /// a contour shrinking onto the visible part of a target that slides behind an occluder is
     /// not a confident lock, whatever γ̂ says (w-eval's α̂ stays "locked" on the sliver).
-    /// `None`: no shape test, the status alone says whether the track is locked (the appearance
-    /// trackers, whose lock chain reads the target's colour: a face that grows as it nears the
-    /// camera is still held). A configuration file that leaves it out means `None` (TOML has no
-    /// null, so this is how a printed `None` loads back), although the default is 0.15.
-    #[serde(default)]
+    /// `None` (the default, and `head`'s): no shape test, the status alone says whether the
+    /// track is locked (the lock chain of the appearance terms reads the target's colour: a face
+    /// that grows as it nears the camera is still held). The contour presets use 0.15
+    /// ([`crate::CONTOUR_SHAPE_TOLERANCE`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub shape_tolerance: Option<f64>,
     /// The jump starts from the memory as it was this many locked frames before the last one: a
     /// track in trouble lags behind its target for a few frames before any test flags it.
@@ -71,7 +71,7 @@ impl Default for ReacquisitionSettings {
     fn default() -> Self {
         Self {
             lock_gamma: 0.15,
-            shape_tolerance: Some(0.15),
+            shape_tolerance: None,
             rollback: 5,
             share_rate: 0.02,
             max_share: 0.3,
