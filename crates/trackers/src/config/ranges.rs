@@ -6,6 +6,9 @@
 //! The check reads the configuration as its JSON form, so the paths are those of the file
 //! (`dynamics.sigma_translation`, `clutter.switching.lambda_mean`, `motion.estimator.robust.Tukey.c`)
 //! and an element of a list is named with its index (`clutter.switching.transition[0][2]`). The
+//! JSON form leaves out the settings the tracker does not read while they hold their defaults
+//! (which are in range); an unread setting at another value is in it, so it is checked here
+//! before [`TrackerConfig::validate`] refuses it as unread. The
 //! owning crates' own checks still run after it, for what a range cannot say (rows of a
 //! transition matrix that sum to 1, a window no longer than a measurement line, `low < high`).
 //!
