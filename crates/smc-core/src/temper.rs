@@ -9,8 +9,8 @@
 //! whenever the untempered weights already keep the floor, so a well-behaved step is untouched.
 //!
 //! **Why bisection finds it.** With l = log w and E_ψ the expectation under weights ∝ e^{ψ l},
-//! log ESS(φ) = 2 log Σ e^{φ l} − log Σ e^{2φ l}, whose derivative is 2 E_φ[l] − 2 E_{2φ}[l]. Since
-//! d/dψ E_ψ[l] = Var_ψ(l) ≥ 0, E_{2φ}[l] ≥ E_φ[l]: the ESS never grows with φ. The set
+//! log ESS(φ) = 2 log Σ e^{φ l} − log Σ e^{2φ l}, whose derivative is 2 E_φ\[l\] − 2 E_{2φ}\[l\]. Since
+//! d/dψ E_ψ\[l\] = Var_ψ(l) ≥ 0, E_{2φ}\[l\] ≥ E_φ\[l\]: the ESS never grows with φ. The set
 //! {φ : ESS(φ) ≥ min_ess} is therefore an interval (0, φ*], and bisection converges to φ*.
 
 use crate::error::{Degeneracy, Error};

@@ -142,6 +142,8 @@ pub struct OtbArgs {
     /// Protocol (repeatable): ope, tre or sre.
     #[arg(long = "protocol", value_enum, default_values_t = [Protocol::Ope])]
     pub protocols: Vec<Protocol>,
+    // The help text shows the path pattern as typed; rustdoc would read its <…> as HTML.
+    #[allow(rustdoc::invalid_html_tags)]
     /// Another tracker's boxes, NAME=DIR (repeatable): DIR/<protocol>/NAME/<sequence>[.<run>].txt
     /// for every run, as `opencv_peers.py --out DIR` writes them (or this command's own --out).
     #[arg(long = "results", value_name = "NAME=DIR")]

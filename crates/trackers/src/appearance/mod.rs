@@ -3,16 +3,16 @@
 //! held. Three observation terms read it, each a log-likelihood added to the particle's weight
 //! (Odobez's object likelihood p_o, Eq. 18, "shape or colour"):
 //!
-//! - **colour contrast** ([`window::WorkingWindow::contrast`]): each pixel's log-ratio
+//! - **colour contrast** (`WorkingWindow::contrast`): each pixel's log-ratio
 //!   ln(p_target / p_background) of its HSV bin (Pérez et al. 2002's bins; grey levels for grey
 //!   footage) summed inside the ellipse, as the pixel-wise posteriors of Bibby & Reid 2008, less
 //!   the mean positive log-ratio in the ring just outside it;
 //! - **template**: the normalised cross-correlation ρ (Odobez Eq. 23) of the grey patch under the
 //!   hypothesis with the target's template (the first frame's and the learnt one in equal parts);
-//! - **contour contrast** ([`window::WorkingWindow::edge_strength`]): the grey contrast across
+//! - **contour contrast** (`WorkingWindow::edge_strength`): the grey contrast across
 //!   the ellipse along its normals (Birchfield 1998's perimeter gradient), normalised.
 //!
-//! A two-state lock chain ([`crate::monitor::lock`]) reads the estimate's colour similarity to
+//! A two-state lock chain (`monitor::lock`) reads the estimate's colour similarity to
 //! the first frame's target: learning stops while the target is believed lost.
 
 pub(crate) mod colour;
@@ -119,7 +119,8 @@ impl AppearanceSettings {
                 reason: format!("[{inner}, {outer}] must have 1 <= inner < outer"),
             });
         }
-        if !(self.colour_weight + self.template_weight + self.contour_weight > 0.0) {
+        let total = self.colour_weight + self.template_weight + self.contour_weight;
+        if total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::InvalidSetting {
                 name: "appearance.colour_weight",
                 reason: "the colour, template and contour weights cannot all be 0".into(),
@@ -263,7 +264,7 @@ impl Appearance {
     }
 
     /// The colour contrast of the hypothesis `e` on the window last read, in nats per pixel of
-    /// the last estimate's area ([`window::WorkingWindow::contrast`]).
+    /// the last estimate's area (`WorkingWindow::contrast`).
     pub fn colour_contrast(&self, e: &Ellipse) -> f64 {
         self.window
             .contrast(e, self.settings.contrast_ring, self.reference_area)
@@ -281,7 +282,7 @@ impl Appearance {
     }
 
     /// The grey contrast across the contour of `e`, normalised
-    /// ([`window::WorkingWindow::edge_strength`]).
+    /// (`WorkingWindow::edge_strength`).
     pub fn contour_contrast(&self, e: &Ellipse) -> f64 {
         self.window.edge_strength(e)
     }

@@ -1,6 +1,6 @@
 //! The colour contrast of the appearance model ([`crate::appearance`]): the target-against-
 //! background log-ratios summed inside the contour, less the target-like evidence just outside
-//! it ([`crate::appearance::window::WorkingWindow::contrast`]).
+//! it (`appearance::WorkingWindow::contrast`).
 
 use super::{FrameContext, ObservationTerm, add_appearance_measure};
 use crate::particle::Particle;

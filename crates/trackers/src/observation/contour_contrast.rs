@@ -1,6 +1,6 @@
 //! The contour contrast of the appearance model ([`crate::appearance`]): the grey contrast
 //! across the contour along its normals, in units of the window's mean gradient (Birchfield
-//! 1998's perimeter gradient, normalised; [`crate::appearance::window::WorkingWindow::edge_strength`]).
+//! 1998's perimeter gradient, normalised; `appearance::WorkingWindow::edge_strength`).
 
 use super::{FrameContext, ObservationTerm, add_appearance_measure};
 use crate::particle::Particle;

@@ -1,7 +1,7 @@
 //! The components a particle can be drawn from, each with its density so that every weight is
 //! prior × likelihood / proposal (Odobez Eq. 3):
 //!
-//! - the transition prior itself ([`crate::dynamics`], as `smc_core::Bootstrap`): the Gaussian or
+//! - the transition prior itself (`dynamics`, as `smc_core::Bootstrap`): the Gaussian or
 //!   Cauchy AR2 kinematics and the hidden processes;
 //! - Odobez's motion proposal (Eq. 16, [`motion`]): around each cluster's robust affine motion;
 //! - the reacquisition component ([`reacquisition`]): a share of the prior drawn around the

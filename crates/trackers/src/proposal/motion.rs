@@ -152,7 +152,7 @@ pub fn state_increment(
 
 /// Odobez's motion proposal over a set of cluster motions; particle i uses the cluster stored in
 /// its `cluster` field. The hidden variables are drawn from their transitions
-/// ([`TrackerDynamics::sample_hidden`]).
+/// (`TrackerDynamics::sample_hidden`).
 #[derive(Debug, Clone, Copy)]
 pub struct MotionProposal<'a> {
     /// The prior, for the hidden variables and the shape space.
@@ -227,7 +227,7 @@ impl smc_core::Proposal for MotionProposal<'_> {
 
     /// The density of the particle's component: the jump (share η, identical to the prior's, see
     /// [`crate::proposal::reacquisition`]) or the continuation below, times 1 − η; less the hidden chains'
-    /// exploration ratio ([`TrackerDynamics::log_hidden_exploration_ratio`], 0 by default).
+    /// exploration ratio (`TrackerDynamics::log_hidden_exploration_ratio`, 0 by default).
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
         self.dynamics.log_with_jump(previous, next, || {
             self.log_continuation_density(previous, next)
