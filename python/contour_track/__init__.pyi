@@ -88,7 +88,7 @@ class Tracker:
         """Seed of every random draw."""
     @property
     def config(self) -> Dict[str, Any]:
-        """The full configuration, in the format of `track config` (a valid config=)."""
+        """The configuration, in the format of `track config`: the settings the tracker reads (a valid config=)."""
     @property
     def status(self) -> Optional[Status]:
         """What the tracker reported for its last frame; None before init."""

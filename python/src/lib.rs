@@ -340,7 +340,8 @@ impl Tracker {
         self.config.seed
     }
 
-    /// The full configuration as a dict, in the format of `track config` (a valid `config=`).
+    /// The configuration as a dict, in the format of `track config` (the settings the tracker
+    /// reads; a valid `config=`).
     #[getter]
     fn config<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let json = serde_json::to_string(&self.config)

@@ -162,17 +162,23 @@ fn grey_frames_work_too() {
     assert!(mean > 0.6, "mean IoU {mean:.3}");
 }
 
-/// A tracker of `config` started on the moving target's first frame, and its estimate of the
-/// second.
-fn first_update(
-    config: trackers::TrackerConfig,
-) -> (Box<dyn trackers::Tracker>, trackers::Estimate) {
+/// A tracker of `config` started on the moving target's first frame.
+fn started(config: trackers::TrackerConfig) -> Box<dyn trackers::Tracker> {
     let mut tracker = build(config).unwrap();
     let first = target_at(0, &(0..0)).unwrap();
     let (g, c) = render(Some(first));
     tracker
         .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
         .unwrap();
+    tracker
+}
+
+/// A tracker of `config` started on the moving target's first frame, and its estimate of the
+/// second.
+fn first_update(
+    config: trackers::TrackerConfig,
+) -> (Box<dyn trackers::Tracker>, trackers::Estimate) {
+    let mut tracker = started(config);
     let (g, c) = render(target_at(1, &(0..0)));
     let e = tracker
         .update(Frame::with_rgb(W, H, &g, &c).unwrap())
@@ -251,12 +257,7 @@ fn a_tight_annotation_keeps_its_convention() {
 
 /// The estimates of a 25-frame run of `config` on the moving target, every field.
 fn estimates(config: trackers::TrackerConfig) -> Vec<String> {
-    let mut tracker = build(config).unwrap();
-    let first = target_at(0, &(0..0)).unwrap();
-    let (g, c) = render(Some(first));
-    tracker
-        .init(Frame::with_rgb(W, H, &g, &c).unwrap(), first)
-        .unwrap();
+    let mut tracker = started(config);
     (1..25)
         .map(|k| {
             let (g, c) = render(target_at(k, &(0..0)));

@@ -157,6 +157,11 @@ impl Preset {
             lambda_model: LambdaModel::Fixed,
             ..ClutterConfig::default()
         };
+        // The reacquisition jump of the contour presets, with their shape test of a lock.
+        let contour_reacquisition = Some(ReacquisitionSettings {
+            shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
+            ..ReacquisitionSettings::default()
+        });
         let base = TrackerConfig {
             name: self.name().to_owned(),
             particles,
@@ -220,10 +225,7 @@ impl Preset {
             },
             Preset::WOcc => TrackerConfig {
                 likelihood: occlusion_likelihood.clone(),
-                reacquisition: Some(ReacquisitionSettings {
-                    shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
-                    ..ReacquisitionSettings::default()
-                }),
+                reacquisition: contour_reacquisition,
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::RandomWalk(OcclusionConfig {
                     sigma_gamma: W_OCC_SIGMA_GAMMA,
@@ -233,10 +235,7 @@ impl Preset {
             },
             Preset::WEval => TrackerConfig {
                 likelihood: occlusion_likelihood,
-                reacquisition: Some(ReacquisitionSettings {
-                    shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
-                    ..ReacquisitionSettings::default()
-                }),
+                reacquisition: contour_reacquisition,
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::Status(StatusConfig::default()),
                 ..wu
@@ -261,10 +260,7 @@ impl Preset {
                 },
                 clutter: ClutterMode::Switching(ClutterConfig::default()),
                 occlusion: OcclusionMode::Status(StatusConfig::default()),
-                reacquisition: Some(ReacquisitionSettings {
-                    shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
-                    ..ReacquisitionSettings::default()
-                }),
+                reacquisition: contour_reacquisition,
                 ..base
             },
             Preset::Head => TrackerConfig {
