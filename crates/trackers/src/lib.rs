@@ -83,13 +83,13 @@ pub use config::{
     OcclusionMode, PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig,
     UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA, ranges,
 };
+pub use dynamics::reacquisition::ReacquisitionSettings;
 pub use dynamics::{DynamicsSettings, NoiseKind};
 pub use engine::ParticleTracker;
 pub use error::{Error, Result};
 pub use frame::{Frame, FrameBuf};
 pub use observation::{FrameContext, ImplicitMotionSettings, LikelihoodSettings, ObservationTerm};
 pub use particle::Particle;
-pub use proposal::reacquisition::ReacquisitionSettings;
 pub use smc_core::smooth::SmootherSettings;
 pub use smoothing::{ChainCounts, SmoothedRun, SwitchingStatistics};
 pub use space::{STATE_SLOTS, ShapeSpace, StateVector};

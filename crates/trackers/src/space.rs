@@ -215,6 +215,32 @@ pub fn pose_box(pose: &Affine2) -> BoundingBox {
     pose.bounding_box()
 }
 
+/// An ellipse in words, for messages.
+pub(crate) fn describe(e: &Ellipse) -> String {
+    format!(
+        "the ellipse centred at ({}, {}) with semi-axes {} and {} at angle {} rad",
+        e.cx, e.cy, e.a, e.b, e.angle
+    )
+}
+
+/// Checks an initial ellipse: finite, with positive semi-axes.
+///
+/// # Errors
+/// [`crate::Error::InvalidSetting`] naming the ellipse.
+pub(crate) fn check_initial(ellipse: &Ellipse) -> crate::Result<()> {
+    let values = [ellipse.cx, ellipse.cy, ellipse.a, ellipse.b, ellipse.angle];
+    if values.iter().any(|v| !v.is_finite()) || !(ellipse.a > 0.0 && ellipse.b > 0.0) {
+        return Err(crate::Error::InvalidSetting {
+            name: "initial ellipse",
+            reason: format!(
+                "{} must be finite with positive semi-axes",
+                describe(ellipse)
+            ),
+        });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

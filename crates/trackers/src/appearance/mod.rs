@@ -178,7 +178,7 @@ impl Appearance {
                 reason: format!(
                     "{} covers no pixel of the frame or leaves no background around it in the \
                      frame; start from a smaller box inside the frame",
-                    crate::api::describe(e)
+                    crate::space::describe(e)
                 ),
             });
         };

@@ -14,8 +14,8 @@ use smc_core::{FilterSettings, ResamplingScheme};
 
 use crate::appearance::AppearanceSettings;
 use crate::dynamics::DynamicsSettings;
+use crate::dynamics::reacquisition::ReacquisitionSettings;
 use crate::observation::LikelihoodSettings;
-use crate::proposal::reacquisition::ReacquisitionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
 use vision_core::Ellipse;
@@ -385,7 +385,7 @@ impl TrackerConfig {
     /// # Ok::<(), trackers::Error>(())
     /// ```
     pub fn initial_ellipse(&self, e: &Ellipse) -> Result<Ellipse> {
-        crate::api::check_initial(e)?;
+        crate::space::check_initial(e)?;
         if self.rotates() {
             return Ok(*e);
         }

@@ -10,9 +10,9 @@ use super::{
     default_init_spread,
 };
 use crate::appearance::AppearanceSettings;
+use crate::dynamics::reacquisition::ReacquisitionSettings;
 use crate::dynamics::{DynamicsSettings, NoiseKind};
 use crate::observation::{ImplicitMotionSettings, LikelihoodSettings};
-use crate::proposal::reacquisition::ReacquisitionSettings;
 use crate::space::ShapeSpace;
 use crate::{Error, Result};
 use contour_obs::OcclusionForm;

@@ -14,9 +14,10 @@
 use dbn_switch::{ClutterHmm, OcclusionProcess, OcclusionState, StatusHmm, StatusState};
 use rand::Rng;
 
+use crate::dynamics::reacquisition::{Reacquisition, log_mixture_density};
 use crate::particle::Particle;
-use crate::proposal::reacquisition::{Reacquisition, log_mixture_density};
 use crate::space::{ShapeBounds, ShapeSpace, StateVector};
+pub mod reacquisition;
 mod settings;
 pub use settings::{DynamicsSettings, NoiseKind};
 
@@ -54,7 +55,7 @@ pub struct TrackerDynamics {
     /// The domain of the states, set from the initial contour by the tracker.
     pub bounds: ShapeBounds,
     /// The reacquisition jump of the current frame, set by the tracker while the track is not
-    /// locked (see [`crate::proposal::reacquisition`]); `None`: the plain prior.
+    /// locked (see [`crate::dynamics::reacquisition`]); `None`: the plain prior.
     pub reacquisition: Option<Reacquisition>,
     /// The mean shape of [`DynamicsSettings::shape_reversion`], set by the tracker each frame
     /// (the shape remembered over the locked estimates); `None`: no pull.
@@ -104,7 +105,7 @@ impl TrackerDynamics {
     }
 
     /// The density of `next` under the mixture of the jump (share η) and the continuation whose
-    /// log-density `log_continue` computes (see [`crate::proposal::reacquisition::log_mixture_density`]).
+    /// log-density `log_continue` computes (see [`crate::dynamics::reacquisition::log_mixture_density`]).
     pub fn log_with_jump(
         &self,
         previous: &Particle,

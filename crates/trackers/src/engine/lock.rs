@@ -1,12 +1,12 @@
 //! The monitor stage's memory: whether a reported estimate is locked, the constant-velocity
 //! memory of the locked estimates, and the reacquisition component of the next frame's prior
-//! (see [`crate::proposal::reacquisition`]).
+//! (see [`crate::dynamics::reacquisition`]).
 
 use dbn_switch::StatusEstimate;
 
 use super::ParticleTracker;
+use crate::dynamics::reacquisition::Reacquisition;
 use crate::frame::Frame;
-use crate::proposal::reacquisition::Reacquisition;
 use crate::space::{StateVector, UNBOUNDED_CENTRE};
 
 impl ParticleTracker {
@@ -31,7 +31,7 @@ impl ParticleTracker {
     }
 
     /// The reacquisition jump of frame `frame`: present when the configuration asks for it and
-    /// the frames since the last locked one are not locked (see [`crate::proposal::reacquisition`]).
+    /// the frames since the last locked one are not locked (see [`crate::dynamics::reacquisition`]).
     pub(super) fn reacquisition_component(&self, frame: usize) -> Option<Reacquisition> {
         let settings = self.config.reacquisition.as_ref()?;
         let gap = frame.saturating_sub(self.memory.last_locked() + 1);

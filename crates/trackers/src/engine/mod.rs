@@ -35,6 +35,7 @@ use crate::api::{Estimate, Tracker, WeightedEllipse};
 use crate::appearance::Appearance;
 use crate::cluster::Clustering;
 use crate::config::{ClutterMode, OcclusionMode, ProposalKind, TrackerConfig};
+use crate::dynamics::reacquisition::TrackMemory;
 use crate::dynamics::{ClutterProcess, OcclusionModel, TrackerDynamics};
 use crate::frame::Frame;
 use crate::monitor::visibility::{self, Visibility};
@@ -42,7 +43,6 @@ use crate::observation::{
     FrameContext, FrameObservation, LikelihoodModel, ObservationTerm, ReferenceLines,
 };
 use crate::particle::{Particle, default_status};
-use crate::proposal::reacquisition::TrackMemory;
 use crate::proposal::{ClusterMotion, ExploringPrior, MotionProposal};
 use crate::smoothing::SmoothedRun;
 use crate::space::{STATE_SLOTS, ShapeBounds, StateVector};
@@ -73,10 +73,10 @@ pub struct ParticleTracker {
     /// reference lines of the ratio form, see [`FrameObservation::reference`]).
     last_state: StateVector,
     reference: ReferenceLines,
-    /// The constant-velocity memory of the locked estimates (see [`crate::proposal::reacquisition`]).
+    /// The constant-velocity memory of the locked estimates (see [`crate::dynamics::reacquisition`]).
     memory: TrackMemory,
     /// The memory after each of the last locked frames, oldest first: the anchor of the jump is
-    /// the oldest (see [`crate::proposal::reacquisition::ReacquisitionSettings::rollback`]).
+    /// the oldest (see [`crate::dynamics::reacquisition::ReacquisitionSettings::rollback`]).
     history: std::collections::VecDeque<TrackMemory>,
     /// Whether a target is seen at all (with the status HMM only; see
     /// [`crate::monitor::visibility`]).
@@ -84,7 +84,7 @@ pub struct ParticleTracker {
     /// The target's appearance and its lock chain, when the configuration has them.
     appearance: Option<Appearance>,
     /// This frame's best appearance detection while the track is not locked: where the
-    /// reacquisition component draws (see [`crate::proposal::reacquisition`]).
+    /// reacquisition component draws (see [`crate::dynamics::reacquisition`]).
     detection: Option<[f64; 2]>,
     size: (usize, usize),
     frame: usize,
