@@ -190,9 +190,10 @@ pub fn ess_note(tempered: bool) -> String {
             .to_owned()
     } else {
         "ESS: the effective sample size 1/Σw² of the normalised weights just after weighting, \
-         before resampling (N at frame 1, where nothing is weighted). The contour trackers do \
-         not temper their weights: the likelihood multiplies the evidence of every measurement \
-         line, which is sharp next to the spread of the predicted particles, so a few particles \
+         before resampling (N at frame 1, where nothing is weighted). The trackers do not \
+         temper their weights: the likelihood (the evidence of every measurement line, or the \
+         colour and template of the appearance terms) is sharp next to the spread of the \
+         predicted particles, so a few particles \
          carry most of the weight, and an ESS of a few percent of the particles is the usual \
          state of these filters, not a fault (docs/RESULTS.md, \"ESS of the contour \
          trackers\"). The filter resamples every frame, so the particles are renewed around the \

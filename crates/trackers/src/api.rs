@@ -21,7 +21,9 @@ pub struct Estimate {
     pub ellipse: Ellipse,
     /// Its axis-aligned box.
     pub bbox: BoundingBox,
-    /// The estimated shape-space state.
+    /// The estimated shape-space state, of the region the filter tracks: with appearance terms,
+    /// the annotation scaled by the first frame's calibration (`ellipse` is in the annotation's
+    /// convention), in the frame's pixels.
     pub state: StateVector,
     /// Effective sample size after weighting (N at the initialisation frame).
     pub ess: f64,

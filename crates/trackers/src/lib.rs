@@ -16,7 +16,7 @@
 //! | `w-occ` | Wu §5 | prior, {β, λ} HMM, γ walk (σ_γ 0.3), reacquisition | Wu Eq. 11–12, γ as one hidden arc |
 //! | `w-eval` | Wu §6.3 | prior, {β, λ} HMM, {α, γ} HMM, reacquisition | Wu Eq. 11–12, γ as one hidden arc |
 //! | `full` | neither | motion, Eq. 16, all hidden processes | Wu Eq. 11–12 · p_c2 · p_c1 · prior / q |
-//! | `head` | neither (recommended for real footage) | Gaussian AR2 prior, at a working scale | colour contrast · template · contour contrast ([`appearance`]), tempered |
+//! | `head` | neither (recommended for real footage) | Gaussian AR2 prior, at a working scale | colour contrast · template · contour contrast ([`appearance`]) |
 //!
 //! # Example
 //! ```
@@ -78,9 +78,9 @@ pub use appearance::AppearanceSettings;
 pub use build::{build, build_preset, build_with_terms};
 pub use config::{
     AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, CONTOUR_SHAPE_TOLERANCE, ClutterMode,
-    ConfigFormat, DEFAULT_PARTICLES, DEFAULT_SEED, FIXED_LAMBDA, HEAD_MIN_ESS_FRACTION,
-    HEAD_WORKING_RADIUS, MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings, OCCLUSION_ARC,
-    OcclusionMode, PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig,
+    ConfigFormat, DEFAULT_PARTICLES, DEFAULT_SEED, FIXED_LAMBDA, HEAD_WORKING_RADIUS,
+    MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MotionSettings, OCCLUSION_ARC, OcclusionMode,
+    PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig,
     UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA, ranges,
 };
 pub use dynamics::reacquisition::ReacquisitionSettings;

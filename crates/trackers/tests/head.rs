@@ -291,17 +291,28 @@ fn the_same_output_for_one_thread_or_many_and_sequentially() {
 #[test]
 fn particles_diagnostics_and_tempering_are_reported() {
     for seed in [1, 2, 3] {
-        let (tracker, e) = first_update(Preset::Head.config(120, seed));
-        let d = e
-            .diagnostics
-            .expect("head reports the filter's diagnostics");
-        // Tempering keeps the ESS at its floor of 0.3 N (the template is sharp).
+        // Tempered (an opt-in piece of the engine): the ESS stays at its floor of 0.3 N though
+        // the template is sharp, and the exponent says how much the likelihood was flattened.
+        let mut tempered = Preset::Head.config(120, seed);
+        tempered.filter.min_ess_fraction = Some(0.3);
+        let (_, t) = first_update(tempered);
+        let d = t.diagnostics.expect("the engine reports its diagnostics");
         assert!(
             d.ess_after >= 0.3 * 120.0 * (1.0 - 1e-9),
             "seed {seed}: {d:?}"
         );
-        assert!(d.tempering_exponent > 0.0 && d.tempering_exponent <= 1.0);
+        assert!(
+            d.tempering_exponent > 0.0 && d.tempering_exponent < 1.0,
+            "{d:?}"
+        );
+        // head as configured is not tempered: the exponent is 1 and the ESS what it is.
+        let (tracker, e) = first_update(Preset::Head.config(120, seed));
+        let d = e
+            .diagnostics
+            .expect("head reports the filter's diagnostics");
+        assert_eq!(d.tempering_exponent, 1.0);
         assert!((e.ess - d.ess_after).abs() < 1e-9);
+        assert!(d.ess_after < 0.3 * 120.0, "seed {seed}: {d:?}");
         // The particles carry their weights after weighting, heaviest first, and sum to one.
         let all = tracker.particles(usize::MAX);
         assert_eq!(all.len(), 120);

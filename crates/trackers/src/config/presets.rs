@@ -43,7 +43,7 @@ pub enum Preset {
     Full,
     /// The recommended tracker for real footage: the appearance terms ([`crate::appearance`]:
     /// colour contrast, template, contour contrast) with Odobez's Gaussian AR2 prior, at a
-    /// working scale set by the target's size, tempered, with the lock chain.
+    /// working scale set by the target's size, with the lock chain.
     Head,
 }
 
@@ -263,13 +263,11 @@ impl Preset {
                 reacquisition: contour_reacquisition,
                 ..base
             },
+            // Untempered: tempering (`filter.min_ess_fraction`) lost AUC under TRE and SRE on
+            // most sequences (docs/RESULTS.md, decision log).
             Preset::Head => TrackerConfig {
                 likelihood: LikelihoodSettings::default(),
                 appearance: Some(AppearanceSettings::default()),
-                filter: FilterSettings {
-                    min_ess_fraction: Some(HEAD_MIN_ESS_FRACTION),
-                    ..FilterSettings::default()
-                },
                 working_radius: Some(HEAD_WORKING_RADIUS),
                 // The lock chain alone says whether the target is held: a face that grows as it
                 // nears the camera is not lost.
@@ -342,10 +340,6 @@ pub const W_OCC_SIGMA_GAMMA: f64 = 0.3;
 /// log-ratio is not a confident lock (w-eval's α̂ stays locked on a sliver of an occluded target).
 pub const CONTOUR_SHAPE_TOLERANCE: f64 = 0.15;
 
-/// `head`'s ESS floor after weighting, as a fraction of N ([`FilterSettings::min_ess_fraction`]):
-/// the template scores the true face tens of nats above its surroundings, which untempered would
-/// leave one particle to resample from.
-pub const HEAD_MIN_ESS_FRACTION: f64 = 0.3;
 /// `head`'s working radius, pixels: the target is shrunk to a mean radius of 16 px (a side of 32,
 /// the appearance terms' template and window resolution), so its pixel-unit settings (3 px of
 /// translation noise) are a fixed share of its size and its cost does not grow with it.

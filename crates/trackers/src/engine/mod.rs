@@ -10,8 +10,8 @@
 //!    component, hidden-chain exploration; [`crate::proposal`], [`crate::dynamics`]);
 //! 3. **weigh**: the sum of the observation terms' log-likelihoods ([`crate::observation`]), times
 //!    prior over proposal (Odobez Eq. 3);
-//! 4. **temper**: the likelihood raised to the power that keeps the conditional ESS above its
-//!    floor, when the configuration asks ([`smc_core::temper`]);
+//! 4. **temper** (opt-in, no preset): the likelihood raised to the power that keeps the
+//!    conditional ESS above its floor ([`smc_core::temper`]);
 //! 5. **estimate**: the weighted mean pose and the hidden processes' estimates ([`estimate`]);
 //! 6. **monitor**: Wu's status with the visibility check, or the appearance's lock chain
 //!    ([`crate::monitor`]), and the memory of the locked estimates ([`lock`]);
