@@ -120,32 +120,28 @@ fn every_file_of_the_previous_release_loads_as_today_s_preset_but_head() {
 fn track_run_takes_an_old_file_and_refuses_the_old_head_naming_what_replaced_region() {
     let dir = tempfile::tempdir().unwrap();
     let seq = otb_folder(dir.path(), "disc", 4);
-    for file in ["m1.json", "w-fixed.toml"] {
+    // `track run` on the sequence with an old configuration file, 50 particles.
+    let run_with = |file: &str| {
         let out = dir.path().join(file);
-        let o = track(&[
+        let config = old_config(file);
+        track(&[
             "run",
             s(&seq),
             "--config",
-            s(&old_config(file)),
+            s(&config),
             "--particles",
             "50",
             "--out",
             s(&out),
             "--quiet",
-        ]);
+        ])
+    };
+    for file in ["m1.json", "w-fixed.toml"] {
+        let o = run_with(file);
         assert!(o.status.success(), "{file}: {}", common::stderr(&o));
     }
     for file in ["head.json", "head.toml"] {
-        let out = dir.path().join(file);
-        let o = track(&[
-            "run",
-            s(&seq),
-            "--config",
-            s(&old_config(file)),
-            "--out",
-            s(&out),
-            "--quiet",
-        ]);
+        let o = run_with(file);
         assert_eq!(o.status.code(), Some(2), "{file}");
         let e = one_error_line(&o);
         for word in ["--config", "region", "appearance", "track config head"] {

@@ -157,6 +157,11 @@ impl Preset {
             lambda_model: LambdaModel::Fixed,
             ..ClutterConfig::default()
         };
+        // Odobez's prior with the Cauchy noise of Eq. 17, under the motion proposal (m3, full).
+        let motion_dynamics = DynamicsSettings {
+            noise: NoiseKind::Cauchy,
+            ..odobez_dynamics
+        };
         // The reacquisition jump of the contour presets, with their shape test of a lock.
         let contour_reacquisition = Some(ReacquisitionSettings {
             shape_tolerance: Some(CONTOUR_SHAPE_TOLERANCE),
@@ -200,10 +205,7 @@ impl Preset {
                 ..base
             },
             Preset::M3 => TrackerConfig {
-                dynamics: DynamicsSettings {
-                    noise: NoiseKind::Cauchy,
-                    ..odobez_dynamics
-                },
+                dynamics: motion_dynamics,
                 proposal: ProposalKind::Motion,
                 likelihood: LikelihoodSettings {
                     implicit_motion: implicit,
@@ -241,10 +243,7 @@ impl Preset {
                 ..wu
             },
             Preset::Full => TrackerConfig {
-                dynamics: DynamicsSettings {
-                    noise: NoiseKind::Cauchy,
-                    ..odobez_dynamics
-                },
+                dynamics: motion_dynamics,
                 proposal: ProposalKind::Motion,
                 likelihood: LikelihoodSettings {
                     implicit_motion: implicit,
