@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 use common::{s, track};
 use scene_synth::{Scenario, Scene};
 
-/// The presets whose outputs are kept: the region tracker, CONDENSATION, Odobez's motion
+/// The presets whose outputs are kept: head (the appearance terms), CONDENSATION, Odobez's motion
 /// proposal, Wu's switching model with the occlusion arc, and the combined tracker.
 const PRESETS: [&str; 5] = ["head", "m1", "m3", "w-eval", "full"];
 

@@ -189,7 +189,7 @@ fn a_gif_that_drops_frames_says_so_and_its_stride_and_length_can_be_chosen() {
 fn the_report_gives_the_command_line_both_rates_and_statuses_that_add_up() {
     let dir = tempfile::tempdir().unwrap();
     let frames = disc_frames(dir.path(), "seq", 4);
-    // The region tracker: its γ̂ is P(lost), not an occlusion, and it has no partial state.
+    // head's lock chain: its γ̂ is P(lost), not an occlusion, and it has no partial state.
     let out = dir.path().join("head");
     run(&frames, &out, "head", &["--report", "--plots", "--quiet"]);
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();

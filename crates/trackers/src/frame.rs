@@ -1,5 +1,5 @@
 //! Frames as the trackers see them: the workspace's grey image ([`GreyImage`], validated once at
-//! construction) and optionally the 8-bit RGB pixels of the same frame (the region tracker's
+//! construction) and optionally the 8-bit RGB pixels of the same frame (the appearance terms'
 //! colour model reads them; every other tracker reads grey).
 //!
 //! [`Frame`] borrows its pixels; [`FrameBuf`] owns them and is built from the image crate's
@@ -164,7 +164,7 @@ impl<'a> Frame<'a> {
 /// An owned frame: its grey levels 0–255 and, for a colour image, its 8-bit RGB pixels. Built
 /// from the image crate's images with `From`; [`FrameBuf::frame`] lends it to a tracker.
 ///
-/// Colour images keep their RGB pixels (the region tracker, `head`, reads colour) and get their
+/// Colour images keep their RGB pixels (the appearance terms of `head` read colour) and get their
 /// grey levels from the BT.601 luma weights; grey images have no colour. 16-bit and float images
 /// are scaled to 0–255 ([`vision_core::ToGreyBuffer`]).
 ///

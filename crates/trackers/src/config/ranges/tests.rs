@@ -210,7 +210,7 @@ fn the_issue_s_translation_noise_is_refused_and_its_bound_tracks() {
 #[test]
 fn every_setting_at_either_end_of_its_range_tracks_with_finite_contours() {
     // A 96×72 frame: a bright disc of radius 14 on a textured background, moving 2 px right
-    // per frame; colour for the region tracker.
+    // per frame; colour for the appearance terms (head).
     let frames: Vec<(Vec<f32>, Vec<u8>)> = (0..4)
         .map(|k| {
             let mut grey = Vec::with_capacity(96 * 72);
