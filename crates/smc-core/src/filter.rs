@@ -205,6 +205,8 @@ pub struct ParticleFilter<S> {
     previous: Vec<S>,
     log_likelihoods: Vec<f64>,
     log_increments: Vec<f64>,
+    /// Buffers of the tempering search (`FilterSettings::min_ess_fraction`), reused per step.
+    temper_buffers: (Vec<f64>, Vec<f64>),
     seen: Vec<bool>,
     /// The recorded forward pass, when the settings ask for one.
     history: Option<History<S>>,
@@ -228,6 +230,7 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
             previous: Vec::new(),
             log_likelihoods: Vec::new(),
             log_increments: Vec::new(),
+            temper_buffers: (Vec::new(), Vec::new()),
             seen: Vec::new(),
         })
     }
@@ -476,14 +479,9 @@ impl<S: Clone + Send + Sync> ParticleFilter<S> {
                 *o += prior.log_density(prev, next) - proposal.log_density(i, prev, next);
             }
         }
-        let (mut weights, mut scratch) = (Vec::new(), Vec::new());
-        let tempered = crate::temper::tempering_exponent(
-            log_likelihoods,
-            &offsets,
-            min_ess,
-            &mut weights,
-            &mut scratch,
-        );
+        let (weights, scratch) = &mut self.temper_buffers;
+        let tempered =
+            crate::temper::tempering_exponent(log_likelihoods, &offsets, min_ess, weights, scratch);
         self.log_increments = offsets;
         let tempered = tempered.map_err(|e| match e {
             Error::InvalidWeights { reason } => Error::DegenerateWeights { step, reason },

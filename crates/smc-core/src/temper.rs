@@ -70,22 +70,35 @@ pub fn temper(
         normalize_log_weights(lw, w)?;
         Ok(effective_sample_size(w))
     };
-    let restore = |lw: &mut [f64]| lw.copy_from_slice(raw);
-    let ess = apply(1.0, log_weights, weights).inspect_err(|_| restore(log_weights))?;
-    if ess >= min_ess {
-        return Ok(Tempered { exponent: 1.0, ess });
+    let tempered = largest_exponent(min_ess, |phi| apply(phi, log_weights, weights));
+    if tempered.is_err() {
+        log_weights.copy_from_slice(raw);
+    }
+    let (exponent, ess) = tempered?;
+    Ok(Tempered { exponent, ess })
+}
+
+/// The largest φ ∈ (0, 1] with `measure(φ)` ≥ `min` (1 when φ = 1 does; found to 2⁻³⁰ by
+/// bisection, since the ESS and the conditional ESS never grow with φ), and the measure there.
+/// The last call of `measure` is at the φ returned, so whatever it fills holds that φ's weights.
+fn largest_exponent<E>(
+    min: f64,
+    mut measure: impl FnMut(f64) -> Result<f64, E>,
+) -> Result<(f64, f64), E> {
+    let at_one = measure(1.0)?;
+    if at_one >= min {
+        return Ok((1.0, at_one));
     }
     let (mut lo, mut hi) = (0.0, 1.0);
     for _ in 0..BISECTION_STEPS {
         let mid = 0.5 * (lo + hi);
-        if apply(mid, log_weights, weights)? >= min_ess {
+        if measure(mid)? >= min {
             lo = mid;
         } else {
             hi = mid;
         }
     }
-    let ess = apply(lo, log_weights, weights)?;
-    Ok(Tempered { exponent: lo, ess })
+    Ok((lo, measure(lo)?))
 }
 
 /// The largest exponent φ ∈ (0, 1] whose tempered likelihood keeps a *conditional* effective
@@ -153,25 +166,9 @@ pub fn tempering_exponent(
             0.0
         })
     };
-    let cess = apply(1.0, weights)?;
-    if cess >= min_cess {
-        return Ok(Tempered {
-            exponent: 1.0,
-            ess: effective_sample_size(weights),
-        });
-    }
-    let (mut lo, mut hi) = (0.0, 1.0);
-    for _ in 0..BISECTION_STEPS {
-        let mid = 0.5 * (lo + hi);
-        if apply(mid, weights)? >= min_cess {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    apply(lo, weights)?;
+    let (exponent, _) = largest_exponent(min_cess, |phi| apply(phi, weights))?;
     Ok(Tempered {
-        exponent: lo,
+        exponent,
         ess: effective_sample_size(weights),
     })
 }

@@ -116,11 +116,7 @@ impl ParticleTracker {
                 reacquisition: None,
                 shape_anchor: None,
             },
-            likelihood: LikelihoodModel::new(
-                config.space,
-                &config.likelihood,
-                config.appearance.as_ref(),
-            )?,
+            likelihood: LikelihoodModel::new(&config.likelihood, config.appearance.as_ref())?,
             filter: ParticleFilter::new(config.filter.clone())?,
             motion: MotionEstimator::new(config.motion.estimator)?,
             set: None,
@@ -369,15 +365,14 @@ impl Tracker for ParticleTracker {
             gamma,
             status,
         } = estimated?;
-        let status = match (&mut self.appearance, status) {
-            (Some(appearance), None) => {
-                if let Some(e) = self.config.space.pose(&state).to_ellipse() {
-                    appearance.observe(&e)?;
-                }
-                Some(appearance.status())
-            }
-            (_, status) => status,
-        };
+        // The appearance learns from every estimate it holds; its lock chain is the status of a
+        // tracker without Wu's status process.
+        if let Some(appearance) = &mut self.appearance
+            && let Some(e) = self.config.space.pose(&state).to_ellipse()
+        {
+            appearance.observe(&e)?;
+        }
+        let status = status.or_else(|| self.appearance.as_ref().map(Appearance::status));
         self.frame += 1;
         self.last_state = state;
         self.remember_if_locked(&state, gamma, status.as_ref());

@@ -138,7 +138,8 @@ mod tests {
                 "{q}"
             );
         }
-        assert!(LockChain::new(1.0).is_ok() || LockChain::new(1.5).is_err());
+        // A chain that never leaves its state is still a chain; a probability above 1 is not.
+        assert!(LockChain::new(1.0).is_ok());
         assert!(LockChain::new(1.5).is_err() && LockChain::new(f64::NAN).is_err());
     }
 }

@@ -5,7 +5,7 @@
 use contour_obs::{OcclusionForm, ReferenceLines, Template, WuSettings, WuTerm, WuTermWorkspace};
 use vision_core::GreyImage;
 
-use super::{FrameContext, ObservationTerm};
+use super::{FrameContext, ObservationTerm, add_each};
 use crate::Result;
 use crate::particle::Particle;
 
@@ -61,20 +61,20 @@ impl ObservationTerm for ClutterTerm {
         out: &mut [f64],
     ) {
         let mut workspace = self.workspace.clone();
-        for (p, o) in particles.iter().zip(out) {
+        add_each(particles, out, |p| {
             let pose = frame.space.pose(&p.now);
             let (lambda, gamma) = (p.clutter.lambda, p.gamma());
-            *o += self
-                .term
+            let reference = frame.reference;
+            self.term
                 .log_likelihood(
                     &mut workspace,
                     &frame.current,
                     &pose,
                     lambda,
                     gamma,
-                    frame.reference,
+                    reference,
                 )
-                .unwrap_or(f64::NEG_INFINITY);
-        }
+                .ok()
+        });
     }
 }

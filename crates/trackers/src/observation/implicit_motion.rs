@@ -4,7 +4,7 @@
 
 use motion_est::{ImplicitMotionSettings, ImplicitMotionTerm};
 
-use super::{FrameContext, ObservationTerm};
+use super::{FrameContext, ObservationTerm, add_each};
 use crate::Result;
 use crate::particle::Particle;
 
@@ -39,11 +39,10 @@ impl ObservationTerm for ImplicitMotion {
     ) {
         let len = self.term.patch_len();
         let (mut now, mut prev) = (vec![0.0; len], vec![0.0; len]);
-        for (p, o) in particles.iter().zip(out) {
+        add_each(particles, out, |p| {
             let pose = frame.space.pose(&p.now);
             let pose_prev = frame.space.pose(&p.prev);
-            *o += self
-                .term
+            self.term
                 .log_likelihood(
                     frame.current,
                     frame.previous,
@@ -52,7 +51,7 @@ impl ObservationTerm for ImplicitMotion {
                     &mut now,
                     &mut prev,
                 )
-                .unwrap_or(f64::NEG_INFINITY);
-        }
+                .ok()
+        });
     }
 }

@@ -197,9 +197,21 @@ fn add_appearance_measure(
     let Some(appearance) = frame.appearance else {
         return;
     };
+    add_each(particles, out, |p| {
+        let e = frame.ellipse(p)?;
+        measure(appearance, &e).map(|v| weight * v)
+    });
+}
+
+/// Adds `log_likelihood(particle)` to each particle's entry of `out`, −∞ where it is `None` (a
+/// particle the term cannot score): the loop every term runs.
+fn add_each(
+    particles: &[Particle],
+    out: &mut [f64],
+    mut log_likelihood: impl FnMut(&Particle) -> Option<f64>,
+) {
     for (p, o) in particles.iter().zip(out) {
-        let value = frame.ellipse(p).and_then(|e| measure(appearance, &e));
-        *o += value.map_or(f64::NEG_INFINITY, |v| weight * v);
+        *o += log_likelihood(p).unwrap_or(f64::NEG_INFINITY);
     }
 }
 
@@ -219,7 +231,6 @@ impl LikelihoodModel {
     /// Invalid settings, or a workspace that cannot be built: the error is the model's, never
     /// a term silently missing from the particles' likelihood.
     pub fn new(
-        space: ShapeSpace,
         settings: &LikelihoodSettings,
         appearance: Option<&AppearanceSettings>,
     ) -> Result<Self> {
@@ -262,18 +273,12 @@ impl LikelihoodModel {
                 }));
             }
         }
-        let _ = space;
         Ok(Self { terms, reference })
     }
 
     /// Adds a term (a user's own, see [`crate::build_with_terms`]) after the configured ones.
     pub fn push(&mut self, term: Box<dyn ObservationTerm>) {
         self.terms.push(term);
-    }
-
-    /// The terms, in the order they are added.
-    pub fn terms(&self) -> &[Box<dyn ObservationTerm>] {
-        &self.terms
     }
 
     /// The edge counts and observed lengths of the lines of state `x` on `image` into `out`

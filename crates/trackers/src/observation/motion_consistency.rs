@@ -3,7 +3,7 @@
 //! same Gaussian as the motion proposal (Eq. 16), which is why it cancels against q in Eq. 24;
 //! with another proposal it is a term like any other.
 
-use super::{FrameContext, ObservationTerm};
+use super::{FrameContext, ObservationTerm, add_each};
 use crate::particle::Particle;
 use crate::proposal::ClusterMotion;
 use crate::space::{ShapeSpace, axpy};
@@ -36,8 +36,8 @@ impl ObservationTerm for MotionConsistency {
         particles: &[Particle],
         out: &mut [f64],
     ) {
-        for (p, o) in particles.iter().zip(out) {
-            *o += log_motion_consistency(frame.space, frame.clusters, p);
-        }
+        add_each(particles, out, |p| {
+            Some(log_motion_consistency(frame.space, frame.clusters, p))
+        });
     }
 }

@@ -4,7 +4,7 @@
 
 use contour_obs::{MeasurementLines, OdobezLikelihood, OdobezSettings, Template};
 
-use super::{FrameContext, ObservationTerm};
+use super::{FrameContext, ObservationTerm, add_each};
 use crate::Result;
 use crate::particle::Particle;
 
@@ -43,12 +43,11 @@ impl ObservationTerm for ShapeTerm {
         out: &mut [f64],
     ) {
         let mut workspace = self.workspace.clone();
-        for (p, o) in particles.iter().zip(out) {
+        add_each(particles, out, |p| {
             let pose = frame.space.pose(&p.now);
-            *o += self
-                .likelihood
+            self.likelihood
                 .log_likelihood(&mut workspace, &frame.current, &pose)
-                .unwrap_or(f64::NEG_INFINITY);
-        }
+                .ok()
+        });
     }
 }
