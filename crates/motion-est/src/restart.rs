@@ -259,19 +259,24 @@ pub(crate) fn starting_motions(
             break;
         }
         starts.push(m);
-        pool.retain(|v| dist(&m, v) >= tol);
+        pool.retain(|v| dist_squared(&m, v) >= tol * tol);
     }
     starts
 }
 
-fn dist(m: &Affine, v: &BlockVector) -> f64 {
+/// The squared distance between the displacement `m` predicts at a block and the block's own
+/// (squared: the consensus compares it with a threshold for every pair of blocks, and a square
+/// root per pair cost more than the rest of a re-start).
+fn dist_squared(m: &Affine, v: &BlockVector) -> f64 {
     let p = m.at(v.c[0], v.c[1]);
-    (p[0] - v.d[0]).hypot(p[1] - v.d[1])
+    let (dx, dy) = (p[0] - v.d[0], p[1] - v.d[1]);
+    dx * dx + dy * dy
 }
 
 fn agreeing(pool: &[BlockVector], m: &Affine, tol: f64, out: &mut Vec<usize>) {
     out.clear();
-    out.extend((0..pool.len()).filter(|&k| dist(m, &pool[k]) < tol));
+    let t2 = tol * tol;
+    out.extend((0..pool.len()).filter(|&k| dist_squared(m, &pool[k]) < t2));
 }
 
 /// The least-squares affine motion of the `members` of `pool`; a translation (their mean) when

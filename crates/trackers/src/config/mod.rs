@@ -58,6 +58,22 @@ pub struct MotionSettings {
     /// `occlusion` scene either (docs/RESULTS.md, decision log).
     #[serde(default)]
     pub occlusion_aware: bool,
+    /// The mean radius, in pixels, that the target is shrunk to for the motion estimates (see
+    /// [`crate::working_scale`]; fixed at initialisation); `None`: the tracker's own pixels. Default
+    /// [`MOTION_WORKING_RADIUS`]: the dominant affine motion of a region of ~800 pixels is
+    /// already found to a small fraction of a pixel, so more pixels only cost time (an estimate
+    /// costs as much as the region has pixels), while a large face's own fine motions (eyes,
+    /// mouth, hair) weigh more in the robust fit the finer the resolution.
+    #[serde(default = "default_motion_working_radius")]
+    pub working_radius: Option<f64>,
+}
+
+/// The default of [`MotionSettings::working_radius`], the same as `head`'s whole-tracker
+/// working radius ([`HEAD_WORKING_RADIUS`]): Odobez's and Wu's heads are of this size.
+pub const MOTION_WORKING_RADIUS: f64 = HEAD_WORKING_RADIUS;
+
+fn default_motion_working_radius() -> Option<f64> {
+    Some(MOTION_WORKING_RADIUS)
 }
 
 impl Default for MotionSettings {
@@ -70,6 +86,7 @@ impl Default for MotionSettings {
             cluster_iterations: 3,
             occlusion_aware: false,
             warm_start: true,
+            working_radius: default_motion_working_radius(),
         }
     }
 }

@@ -53,6 +53,7 @@ impl TrackerConfig {
                 clusters_per_particle,
                 cluster_iterations,
                 occlusion_aware,
+                working_radius,
             } = &self.motion;
             let d = MotionSettings::default();
             let changed = [
@@ -72,6 +73,7 @@ impl TrackerConfig {
                     "motion.occlusion_aware",
                     *occlusion_aware != d.occlusion_aware,
                 ),
+                ("motion.working_radius", *working_radius != d.working_radius),
             ];
             if let Some((name, _)) = changed.into_iter().find(|(_, c)| *c) {
                 return Err(unread(name, NO_MOTION));

@@ -25,7 +25,7 @@ pub mod scale;
 use std::time::Instant;
 
 use dbn_switch::{ClutterHmm, ClutterState, OcclusionProcess, StatusHmm, StatusState};
-use motion_est::{MotionEstimator, Pyramid, Workspace};
+use motion_est::{MotionEstimator, Workspace};
 use rand_distr::{Distribution, StandardNormal};
 use smc_core::smooth::{SmootherSettings, smooth_marginals};
 use smc_core::{Bootstrap, ParticleFilter, ParticleSet, StepDiagnostics};
@@ -48,6 +48,7 @@ use crate::smoothing::SmoothedRun;
 use crate::space::{STATE_SLOTS, ShapeBounds, StateVector};
 use crate::{Error, Result};
 use estimate::PosteriorSummary;
+use motion::MotionFrames;
 
 /// The particle-filter tracker behind every preset.
 #[derive(Debug)]
@@ -58,8 +59,7 @@ pub struct ParticleTracker {
     filter: ParticleFilter<Particle>,
     set: Option<ParticleSet<Particle>>,
     motion: MotionEstimator,
-    pyramid_prev: Pyramid,
-    pyramid_now: Pyramid,
+    motion_frames: MotionFrames,
     motion_workspace: Workspace,
     clustering: Clustering,
     clusters: Vec<ClusterMotion>,
@@ -120,8 +120,7 @@ impl ParticleTracker {
             filter: ParticleFilter::new(config.filter.clone())?,
             motion: MotionEstimator::new(config.motion.estimator)?,
             set: None,
-            pyramid_prev: Pyramid::new(),
-            pyramid_now: Pyramid::new(),
+            motion_frames: MotionFrames::default(),
             motion_workspace: Workspace::new(),
             clustering: Clustering::default(),
             clusters: Vec::new(),
@@ -305,8 +304,12 @@ impl Tracker for ParticleTracker {
         self.history.push_back(self.memory.clone());
         self.dynamics.reacquisition = None;
         if self.config.needs_motion() {
-            self.motion
-                .build_pyramid_into(frame.grey(), &mut self.pyramid_now)?;
+            self.motion_frames.start(
+                &self.motion,
+                &frame,
+                &tracked,
+                self.config.motion.working_radius,
+            )?;
         }
         self.report(centre, start.elapsed().as_secs_f64() * 1e3)
     }

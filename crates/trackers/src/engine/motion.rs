@@ -1,15 +1,80 @@
 //! The view stage's motion: the particles clustered, and each cluster's robust affine motion
 //! from the previous frame to the current one (Odobez §5, Eq. 13–15), the mean and covariance
 //! of the motion proposal (Eq. 16) and of the consistency term p_c1 (Eq. 21).
+//!
+//! The motion is estimated on frames shrunk so that the target's mean radius is
+//! [`MotionSettings::working_radius`](crate::MotionSettings::working_radius) pixels
+//! ([`MotionFrames`]), and mapped back to the tracker's pixels.
 
-use motion_est::Region;
+use motion_est::{MotionEstimator, Pyramid, Region};
+use vision_core::Ellipse;
 
 use super::ParticleTracker;
+use super::scale::{Shrinker, WorkingScale};
 use crate::cluster::cluster_particles;
 use crate::frame::Frame;
 use crate::proposal::{ClusterMotion, state_increment};
 use crate::space::{STATE_SLOTS, axpy};
 use crate::{Error, Result};
+
+/// The pyramids of the previous and the current frame that the motion is estimated between, at
+/// the motion's working scale (fixed at initialisation from the target's size).
+#[derive(Debug, Clone)]
+pub(super) struct MotionFrames {
+    scale: WorkingScale,
+    shrinker: Shrinker,
+    prev: Pyramid,
+    now: Pyramid,
+}
+
+impl Default for MotionFrames {
+    fn default() -> Self {
+        Self {
+            scale: WorkingScale::IDENTITY,
+            shrinker: Shrinker::default(),
+            prev: Pyramid::new(),
+            now: Pyramid::new(),
+        }
+    }
+}
+
+impl MotionFrames {
+    /// Sets the working scale for `target` (`None`: the frame's own pixels) and builds the
+    /// first frame's pyramid.
+    pub(super) fn start(
+        &mut self,
+        estimator: &MotionEstimator,
+        frame: &Frame<'_>,
+        target: &Ellipse,
+        working_radius: Option<f64>,
+    ) -> Result<()> {
+        self.scale = working_radius.map_or(WorkingScale::IDENTITY, |r| {
+            WorkingScale::for_target(target, r)
+        });
+        self.shrinker = if self.scale.is_identity() {
+            Shrinker::default()
+        } else {
+            Shrinker::new(self.scale, frame.width(), frame.height())
+        };
+        self.build(estimator, frame)
+    }
+
+    /// The next frame: the current pyramid becomes the previous one.
+    pub(super) fn advance(&mut self, estimator: &MotionEstimator, frame: &Frame<'_>) -> Result<()> {
+        std::mem::swap(&mut self.prev, &mut self.now);
+        self.build(estimator, frame)
+    }
+
+    fn build(&mut self, estimator: &MotionEstimator, frame: &Frame<'_>) -> Result<()> {
+        if self.scale.is_identity() {
+            estimator.build_pyramid_into(frame.grey(), &mut self.now)?;
+        } else {
+            let grey = self.shrinker.shrink_grey(frame)?;
+            estimator.build_pyramid_into(grey, &mut self.now)?;
+        }
+        Ok(())
+    }
+}
 
 impl ParticleTracker {
     pub(super) fn estimate_cluster_motions(&mut self, frame: &Frame<'_>) -> Result<(usize, usize)> {
@@ -17,9 +82,8 @@ impl ParticleTracker {
             return Err(Error::NotInitialised);
         };
         let space = self.config.space;
-        std::mem::swap(&mut self.pyramid_prev, &mut self.pyramid_now);
-        self.motion
-            .build_pyramid_into(frame.grey(), &mut self.pyramid_now)?;
+        self.motion_frames.advance(&self.motion, frame)?;
+        let scale = self.motion_frames.scale;
         let k = self.config.motion.cluster_count(set.len());
         cluster_particles(
             space,
@@ -53,18 +117,13 @@ impl ParticleTracker {
             let pose = space.pose(mean);
             let sigmas = self.dynamics.settings.sigmas(space, mean);
             let motion = pose.to_ellipse().and_then(|e| {
-                let region = Region::Ellipse(vision_core::Ellipse {
-                    cx: e.cx,
-                    cy: e.cy,
-                    a: e.a,
-                    b: e.b,
-                    angle: e.angle,
-                });
+                let e = scale.to_working(&e);
+                let region = Region::Ellipse(e);
                 let est = self
                     .motion
                     .estimate_from(
-                        &self.pyramid_prev,
-                        &self.pyramid_now,
+                        &self.motion_frames.prev,
+                        &self.motion_frames.now,
                         &region,
                         spec,
                         Some([e.cx, e.cy]),
@@ -78,8 +137,9 @@ impl ParticleTracker {
                 if self.config.motion.warm_start && est.converged {
                     warm = Some(est.params.clone());
                 }
-                let (d, cov) =
-                    state_increment(space, mean, &est.affine(), &est.affine_covariance()).ok()?;
+                let (affine, affine_cov) =
+                    scale.affine_to_frame(est.affine(), &est.affine_covariance());
+                let (d, cov) = state_increment(space, mean, &affine, &affine_cov).ok()?;
                 ClusterMotion::new(space, d, &cov, &sigmas, est.converged)
             });
             let motion = motion.unwrap_or_else(|| {
@@ -90,5 +150,87 @@ impl ParticleTracker {
         }
         self.prev_means = prev_means;
         Ok((used, failures))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use motion_est::{ModelSpec, MotionModel, Settings, Workspace};
+
+    /// A smooth texture of several wavelengths, at (x, y) in frame pixels.
+    fn texture(x: f64, y: f64) -> f32 {
+        (100.0
+            + 40.0 * (0.21 * x + 0.05 * y).sin()
+            + 30.0 * (0.13 * y - 0.07 * x).cos()
+            + 20.0 * (0.09 * (x + y)).sin() * (0.17 * y).cos()) as f32
+    }
+
+    #[test]
+    fn motion_estimated_on_shrunk_frames_maps_back_to_the_frames_affine_motion() {
+        // Frame 1 is frame 0 moved by a known affine displacement about the target's centre; the
+        // motion estimated on both frames shrunk to a 16 px working radius must come back, in
+        // frame pixels, as that displacement.
+        let (w, h) = (320usize, 240usize);
+        let target = Ellipse {
+            cx: 160.0,
+            cy: 120.0,
+            a: 60.0,
+            b: 70.0,
+            angle: 0.0,
+        };
+        let truth = [5.0, 0.02, -0.01, -3.0, 0.015, 0.01];
+        let frame0: Vec<f32> = (0..w * h)
+            .map(|k| texture((k % w) as f64, (k / w) as f64))
+            .collect();
+        // frame1(p + d(p)) = frame0(p): frame1(q) = frame0(p) with p − c = (I + A)⁻¹(q − c − t).
+        let [t0, a11, a12, t1, a21, a22] = truth;
+        let (m11, m12, m21, m22) = (1.0 + a11, a12, a21, 1.0 + a22);
+        let det = m11 * m22 - m12 * m21;
+        let frame1: Vec<f32> = (0..w * h)
+            .map(|k| {
+                let (qx, qy) = (
+                    (k % w) as f64 - target.cx - t0,
+                    (k / w) as f64 - target.cy - t1,
+                );
+                let px = (m22 * qx - m12 * qy) / det;
+                let py = (m11 * qy - m21 * qx) / det;
+                texture(target.cx + px, target.cy + py)
+            })
+            .collect();
+        let estimator = MotionEstimator::new(Settings::tracking()).unwrap();
+        let mut frames = MotionFrames::default();
+        let f0 = Frame::new(w, h, &frame0).unwrap();
+        let f1 = Frame::new(w, h, &frame1).unwrap();
+        frames.start(&estimator, &f0, &target, Some(16.0)).unwrap();
+        frames.advance(&estimator, &f1).unwrap();
+        let scale = frames.scale;
+        assert!(scale.factor() > 4.0);
+        let e = scale.to_working(&target);
+        let est = estimator
+            .estimate_from(
+                &frames.prev,
+                &frames.now,
+                &Region::Ellipse(e),
+                ModelSpec::new(MotionModel::Affine, false),
+                Some([e.cx, e.cy]),
+                None,
+                &mut Workspace::new(),
+            )
+            .unwrap();
+        let (affine, cov) = scale.affine_to_frame(est.affine(), &est.affine_covariance());
+        for (i, (got, want)) in affine.iter().zip(truth).enumerate() {
+            let tolerance = if i % 3 == 0 { 0.05 } else { 0.002 };
+            assert!(
+                (got - want).abs() < tolerance,
+                "a{}: {got} vs {want}",
+                i + 1
+            );
+        }
+        // The translations' variance is in frame pixels²: f² times the working one's.
+        let working = est.affine_covariance();
+        let f2 = scale.factor().powi(2);
+        assert!((cov[(0, 0)] - f2 * working[(0, 0)]).abs() <= 1e-12 * cov[(0, 0)].abs());
+        assert_eq!(cov[(1, 1)], working[(1, 1)]);
     }
 }

@@ -14,8 +14,9 @@
 //! which is what a camera with larger pixels would have recorded: the noise falls by f and fine
 //! texture averages out, while an outline of the target's size is kept.
 
+use nalgebra::{Matrix6, Vector6};
 use smc_core::smooth::SmootherSettings;
-use vision_core::{BoundingBox, Ellipse};
+use vision_core::{BoundingBox, Ellipse, GreyImage};
 
 use crate::Result;
 use crate::api::{Estimate, Tracker, WeightedEllipse};
@@ -105,6 +106,25 @@ impl WorkingScale {
         e
     }
 
+    /// Odobez's affine displacement parameters `[a1..a6]` (Eq. 13) and their covariance, estimated
+    /// on the working frame about a point, in frame pixels about the same point: the
+    /// displacement is `factor` times longer while the coordinates relative to the point are too,
+    /// so the translations a1, a4 scale by `factor` and the linear part is unchanged.
+    pub fn affine_to_frame(
+        &self,
+        affine: [f64; 6],
+        covariance: &Matrix6<f64>,
+    ) -> ([f64; 6], Matrix6<f64>) {
+        let f = self.factor;
+        let d = Vector6::new(f, 1.0, 1.0, f, 1.0, 1.0);
+        let mut a = affine;
+        for (v, s) in a.iter_mut().zip(d.iter()) {
+            *v *= s;
+        }
+        let cov = Matrix6::from_fn(|i, j| covariance[(i, j)] * d[i] * d[j]);
+        (a, cov)
+    }
+
     /// The size of the working frame of a `width`×`height` frame (at least 1×1).
     pub fn working_size(&self, width: usize, height: usize) -> (usize, usize) {
         let shrink = |n: usize| ((n as f64 / self.factor).floor() as usize).max(1);
@@ -150,7 +170,7 @@ impl AxisBoxes {
 
 /// Shrinks frames of one size by a [`WorkingScale`], reusing its buffers.
 #[derive(Debug, Clone, Default)]
-struct Shrinker {
+pub(crate) struct Shrinker {
     size: (usize, usize),
     out: (usize, usize),
     columns: AxisBoxes,
@@ -164,7 +184,7 @@ struct Shrinker {
 }
 
 impl Shrinker {
-    fn new(scale: WorkingScale, width: usize, height: usize) -> Self {
+    pub(crate) fn new(scale: WorkingScale, width: usize, height: usize) -> Self {
         let out = scale.working_size(width, height);
         Self {
             size: (width, height),
@@ -183,6 +203,14 @@ impl Shrinker {
         let mut pixels = std::mem::take(&mut self.pixels);
         self.shrink_into(|k| data[k], &mut pixels);
         self.pixels = pixels;
+    }
+
+    /// Shrinks a grey frame of this shrinker's size (checked by the caller) and returns the
+    /// working frame.
+    pub(crate) fn shrink_grey(&mut self, frame: &Frame<'_>) -> Result<GreyImage<'_>> {
+        debug_assert_eq!((frame.width(), frame.height()), self.size);
+        self.shrink(frame.data());
+        Ok(GreyImage::new(self.out.0, self.out.1, &self.pixels)?)
     }
 
     /// Shrinks the colour of a frame (`order`: where R, G and B sit in each pixel) into
