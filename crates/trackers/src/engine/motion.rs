@@ -51,11 +51,7 @@ impl MotionFrames {
         self.scale = working_radius.map_or(WorkingScale::IDENTITY, |r| {
             WorkingScale::for_target(target, r)
         });
-        self.shrinker = if self.scale.is_identity() {
-            Shrinker::default()
-        } else {
-            Shrinker::new(self.scale, frame.width(), frame.height())
-        };
+        self.shrinker = Shrinker::for_frames(self.scale, frame.width(), frame.height());
         self.build(estimator, frame)
     }
 

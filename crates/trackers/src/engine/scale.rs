@@ -184,7 +184,17 @@ pub(crate) struct Shrinker {
 }
 
 impl Shrinker {
-    pub(crate) fn new(scale: WorkingScale, width: usize, height: usize) -> Self {
+    /// A shrinker of `width`×`height` frames by `scale`; an empty one (no buffers) for the
+    /// identity, which never shrinks.
+    pub(crate) fn for_frames(scale: WorkingScale, width: usize, height: usize) -> Self {
+        if scale.is_identity() {
+            Self::default()
+        } else {
+            Self::new(scale, width, height)
+        }
+    }
+
+    fn new(scale: WorkingScale, width: usize, height: usize) -> Self {
         let out = scale.working_size(width, height);
         Self {
             size: (width, height),
@@ -334,11 +344,7 @@ impl Tracker for ScaledTracker {
             Some(r) => WorkingScale::for_target(&ellipse, r),
             None => WorkingScale::IDENTITY,
         };
-        self.shrinker = if self.scale.is_identity() {
-            Shrinker::default()
-        } else {
-            Shrinker::new(self.scale, frame.width(), frame.height())
-        };
+        self.shrinker = Shrinker::for_frames(self.scale, frame.width(), frame.height());
         let working = self.scale.to_working(&ellipse);
         self.on_working_frame(frame, |inner, f| inner.init(f, working))
     }
