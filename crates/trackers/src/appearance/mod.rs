@@ -88,10 +88,11 @@ pub struct AppearanceSettings {
     /// its cost bound while the whole frame is searched.
     pub max_detection_centres: usize,
     /// Most working pixels read from one frame (default 40 000): the window's cost bound. The
-    /// window around a held target (`search` half-axes each way at the working scale) stays
-    /// under it, so it is read at one window pixel per pixel of the tracker's frame; the whole
-    /// frame read while the target is lost is read coarser, which changes what the detection
-    /// and the lock chain see.
+    /// window around a target of the working radius (`search` = 3 half-axes each way: 96 × 96
+    /// working pixels at 16 px) is well under it and is read at one window pixel per pixel of
+    /// the tracker's frame. Only the whole frame, read while the target is lost, and the window
+    /// of a target grown past a mean radius of √(40 000 / 36) ≈ 33 working pixels are read
+    /// coarser, which changes what the detection and the lock chain see.
     pub max_window_pixels: usize,
     /// Scale factors of the annotation tried at the first frame for the region the colours
     /// support ([`Appearance::tracked`]; default 0.8 to 1.25, about 5 % apart). Empty: the
@@ -178,7 +179,7 @@ impl AppearanceSettings {
     /// lost one.
     pub fn validate(&self) -> Result<()> {
         let [locked, lost] = self.lock_centres;
-        if !(locked > lost) {
+        if locked.partial_cmp(&lost) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::InvalidSetting {
                 name: "appearance.lock_centres",
                 reason: format!(
