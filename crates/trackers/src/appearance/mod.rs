@@ -641,6 +641,38 @@ mod tests {
     }
 
     #[test]
+    fn a_file_without_the_new_fields_loads_today_s_values() {
+        // The appearance section of a file written before the constants became settings.
+        let old: AppearanceSettings = toml::from_str(
+            "search = 3.0\nhs_bins = 8\ncolour_weight = 12.0\nlock_persistence = 0.95\n",
+        )
+        .unwrap();
+        assert_eq!(old, AppearanceSettings::default());
+        let d = &old.histogram;
+        assert_eq!(
+            (d.min_saturation, d.min_value, d.min_chromatic_share),
+            (0.1, 0.2, 0.02)
+        );
+        assert_eq!((d.bin_floor, d.max_log_ratio), (1e-3, 3.0));
+        assert_eq!((old.lock_spread, old.lock_centres), (0.3, [1.0, 0.0]));
+        assert_eq!(old.max_background_similarity, 0.9);
+        assert_eq!(old.max_window_pixels, 40_000);
+        // A histogram table may give only what it changes.
+        let one: AppearanceSettings = toml::from_str("[histogram]\nmax_log_ratio = 5.0\n").unwrap();
+        assert_eq!(
+            one.histogram,
+            HistogramSettings {
+                max_log_ratio: 5.0,
+                ..HistogramSettings::default()
+            }
+        );
+        let e = toml::from_str::<AppearanceSettings>("[histogram]\nbin_flor = 0.1\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bin_flor"), "{e}");
+    }
+
+    #[test]
     fn lock_centres_out_of_order_are_refused_by_name() {
         for centres in [[0.0, 1.0], [0.5, 0.5], [f64::NAN, 0.0]] {
             let s = AppearanceSettings {
