@@ -74,7 +74,7 @@ mod space;
 pub use engine::scale as working_scale;
 
 pub use api::{Estimate, Tracker, WeightedEllipse, status_from_gamma};
-pub use appearance::AppearanceSettings;
+pub use appearance::{AppearanceSettings, HistogramSettings};
 pub use build::{build, build_preset, build_with_terms};
 pub use config::{
     AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, CONTOUR_SHAPE_TOLERANCE, ClutterMode,

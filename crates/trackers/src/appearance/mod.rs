@@ -27,13 +27,6 @@ use crate::{Error, Result};
 use colour::{ColourBins, Histogram, is_chromatic, log_ratios};
 use window::WorkingWindow;
 
-/// Most working pixels read from one frame (a whole frame while the target is lost is read
-/// coarser to stay under it).
-const MAX_WINDOW_PIXELS: f64 = 40_000.0;
-/// Largest background similarity used to rescale the lock chain's observation (a target that
-/// looks like its background cannot be told from it by colour; the rescaling then saturates).
-const MAX_BACKGROUND_SIMILARITY: f64 = 0.9;
-
 /// Settings of the appearance model and its three terms. Every field has a default, so a
 /// configuration file may give only what it changes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -70,16 +63,83 @@ pub struct AppearanceSettings {
     pub background_rate: f64,
     /// Learning rate of the template from locked frames (default 0.05).
     pub template_rate: f64,
+    /// Which pixels' hue the colour histogram trusts, when a frame counts as colour, and how far
+    /// one bin's evidence reaches ([`HistogramSettings`]).
+    pub histogram: HistogramSettings,
     /// Probability that the lock chain keeps its state from one frame to the next (default
     /// 0.95).
     pub lock_persistence: f64,
+    /// Spread σ of the lock chain's observation q under either state, N(q; c, σ²) (default
+    /// 0.3): how far from its state's centre a frame's q may stray. No paper gives it; it was set
+    /// by hand with the chain. At 0.3 one frame whose q is 0 favours "lost" over "locked" by
+    /// e^{1/(2σ²)} ≈ 260 to 1, more than the 19 to 1 of a persistence of 0.95: one frame that
+    /// looks like the background is enough to say lost.
+    pub lock_spread: f64,
+    /// Centres of q under the locked and the lost state (default 1 and 0: the first frame's
+    /// target and its background, by the rescaling of q). The locked centre must be above the
+    /// lost one.
+    pub lock_centres: [f64; 2],
+    /// Largest similarity ρ_bg of the first frame's background to its target that rescales the
+    /// lock chain's q = (ρ − ρ_bg) / (1 − ρ_bg) (default 0.9). A target whose colours are its
+    /// background's cannot be told from it by colour; the bound keeps the rescaling from
+    /// dividing by nearly 0, so that q stays within a few units of [0, 1].
+    pub max_background_similarity: f64,
     /// Most centres the detection of [`Appearance::detect`] scores in one frame (default 1024):
     /// its cost bound while the whole frame is searched.
     pub max_detection_centres: usize,
+    /// Most working pixels read from one frame (default 40 000): the window's cost bound. The
+    /// window around a target of the working radius (`search` = 3 half-axes each way: 96 × 96
+    /// working pixels at 16 px) is well under it and is read at one window pixel per pixel of
+    /// the tracker's frame. Only the whole frame, read while the target is lost, and the window
+    /// of a target grown past a mean radius of √(40 000 / 36) ≈ 33 working pixels are read
+    /// coarser, which changes what the detection and the lock chain see.
+    pub max_window_pixels: usize,
     /// Scale factors of the annotation tried at the first frame for the region the colours
     /// support ([`Appearance::tracked`]; default 0.8 to 1.25, about 5 % apart). Empty: the
     /// annotation is tracked as drawn.
     pub calibration_scales: Vec<f64>,
+}
+
+/// The colour histogram's constants: which pixels' hue it trusts, when a frame counts as colour,
+/// and how far one bin's evidence reaches (`appearance.histogram` in a configuration file).
+/// Every field has a default.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HistogramSettings {
+    /// Saturation below which a pixel's hue is not trusted and the pixel goes to the value bins
+    /// (default 0.1, Pérez et al. 2002's: the hue of a nearly grey pixel is noise). The
+    /// saturation bins span this threshold to 1.
+    pub min_saturation: f64,
+    /// Value (brightness, 0–1) below which a pixel's hue is not trusted (default 0.2, Pérez et
+    /// al. 2002's: the hue of a dark pixel is noise).
+    pub min_value: f64,
+    /// Share of an RGB frame's pixels with a trusted hue below which the frame is read as grey
+    /// (default 0.02): a grey video stored as RGB has no hue to histogram, and its grey levels
+    /// are binned finer (twice `value_bins`) than the value bins of a colour frame. The
+    /// threshold is set by hand: low enough for colour footage with a few coloured things on a
+    /// grey scene, high enough to ignore the scattered tints a grey video's compression leaves.
+    pub min_chromatic_share: f64,
+    /// Probability ε added to every bin of the target's and the background's histograms before
+    /// their log-ratio ln((p_t + ε) / (p_b + ε)) (default 0.001): a bin empty on either side
+    /// would otherwise give ±∞. It is small beside a bin's mean mass (1/72 with 8 × 8
+    /// hue–saturation and 8 value bins), so it moves only the log-ratios of nearly empty bins.
+    pub bin_floor: f64,
+    /// Bound M of a bin's log-ratio, nats: ±M (default 3). One pixel of a colour the background
+    /// never shows is worth at most e³ ≈ 20 to 1 for the target, so a few such pixels cannot
+    /// outvote a region.
+    pub max_log_ratio: f64,
+}
+
+impl Default for HistogramSettings {
+    fn default() -> Self {
+        Self {
+            min_saturation: 0.1,
+            min_value: 0.2,
+            min_chromatic_share: 0.02,
+            bin_floor: 1e-3,
+            max_log_ratio: 3.0,
+        }
+    }
 }
 
 impl Default for AppearanceSettings {
@@ -98,8 +158,13 @@ impl Default for AppearanceSettings {
             target_rate: 0.02,
             background_rate: 0.2,
             template_rate: 0.05,
+            histogram: HistogramSettings::default(),
             lock_persistence: 0.95,
+            lock_spread: 0.3,
+            lock_centres: [1.0, 0.0],
+            max_background_similarity: 0.9,
             max_detection_centres: 1024,
+            max_window_pixels: 40_000,
             calibration_scales: vec![0.8, 0.85, 0.9, 0.95, 1.06, 1.12, 1.18, 1.25],
         }
     }
@@ -110,8 +175,18 @@ impl AppearanceSettings {
     ///
     /// # Errors
     /// [`Error::InvalidSetting`] for a background ring whose inner ellipse is not inside its
-    /// outer one, or all three weights zero.
+    /// outer one, all three weights zero, or a lock chain whose locked centre is not above its
+    /// lost one.
     pub fn validate(&self) -> Result<()> {
+        let [locked, lost] = self.lock_centres;
+        if locked.partial_cmp(&lost) != Some(std::cmp::Ordering::Greater) {
+            return Err(Error::InvalidSetting {
+                name: "appearance.lock_centres",
+                reason: format!(
+                    "[{locked}, {lost}] must have the locked centre (first) above the lost one"
+                ),
+            });
+        }
         let [inner, outer] = self.background_ring;
         if !(inner >= 1.0 && inner < outer) {
             return Err(Error::InvalidSetting {
@@ -163,9 +238,9 @@ impl Appearance {
     pub fn start(settings: AppearanceSettings, frame: &Frame<'_>, e: &Ellipse) -> Result<Self> {
         let bins = if frame
             .colour()
-            .is_some_and(|(pixels, _)| is_chromatic(pixels))
+            .is_some_and(|(pixels, _)| is_chromatic(pixels, &settings.histogram))
         {
-            ColourBins::colour(settings.hs_bins, settings.value_bins)
+            ColourBins::colour(settings.hs_bins, settings.value_bins, &settings.histogram)
         } else {
             ColourBins::grey(2 * settings.value_bins)
         };
@@ -183,7 +258,7 @@ impl Appearance {
             });
         };
         let mut ratios = Vec::new();
-        log_ratios(&target, &background, &mut ratios);
+        log_ratios(&target, &background, &settings.histogram, &mut ratios);
         window.integrate(&ratios);
         let calibration = calibrate(
             &window,
@@ -199,7 +274,7 @@ impl Appearance {
             calibration,
             background_similarity: target
                 .bhattacharyya(&background)
-                .clamp(0.0, MAX_BACKGROUND_SIMILARITY),
+                .clamp(0.0, settings.max_background_similarity),
             reference_area: window.area(&tracked),
             reference_template: template.clone(),
             initial_template: template.clone(),
@@ -209,7 +284,11 @@ impl Appearance {
             target,
             initial_background: background.clone(),
             background,
-            lock: LockChain::new(settings.lock_persistence)?,
+            lock: LockChain::new(
+                settings.lock_persistence,
+                settings.lock_spread,
+                settings.lock_centres,
+            )?,
             settings,
             bins,
             window,
@@ -245,7 +324,7 @@ impl Appearance {
         target.blend(&self.target, s.learnt_share);
         let mut background = self.initial_background.clone();
         background.blend(&self.background, s.learnt_share);
-        log_ratios(&target, &background, &mut self.ratios);
+        log_ratios(&target, &background, &s.histogram, &mut self.ratios);
         self.window.integrate(&self.ratios);
         self.reference_area = self.window.area(estimate);
         let share = s.learnt_share;
@@ -387,7 +466,7 @@ fn read_window(
     // One window pixel per pixel of the tracker's frame, which the working scale has already
     // sized to the target ([`crate::working_scale`]); coarser only to keep a whole frame under
     // the bound.
-    let step = (area.max(0.0) / MAX_WINDOW_PIXELS).sqrt().max(1.0);
+    let step = (area.max(0.0) / s.max_window_pixels as f64).sqrt().max(1.0);
     window.read(frame, bins, rect, step);
 }
 
@@ -427,4 +506,186 @@ fn counts(
         Histogram::from_counts(inside),
         Histogram::from_counts(around),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 96×72 frame: a disc of radius 14 at (40, 36) of `target`, on a textured background of
+    /// `background` (each RGB; the texture adds up to ±20 to every component).
+    fn frame(target: [f64; 3], background: [f64; 3]) -> (Vec<f32>, Vec<u8>) {
+        let (mut grey, mut rgb) = (Vec::new(), Vec::new());
+        for i in 0..96 * 72 {
+            let (x, y) = ((i % 96) as f64, (i / 96) as f64);
+            let inside = (x - 40.0).powi(2) + (y - 36.0).powi(2) < 14.0 * 14.0;
+            let t = 20.0 * ((0.7 * x).sin() * (0.9 * y).cos());
+            let p =
+                if inside { target } else { background }.map(|c| (c + t).clamp(0.0, 255.0) as u8);
+            rgb.extend(p);
+            grey.push(0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2]));
+        }
+        (grey, rgb)
+    }
+
+    const SKIN: [f64; 3] = [210.0, 150.0, 120.0];
+    const WALL: [f64; 3] = [60.0, 90.0, 160.0];
+
+    fn start(settings: AppearanceSettings, (grey, rgb): &(Vec<f32>, Vec<u8>)) -> Appearance {
+        let frame = Frame::with_rgb(96, 72, grey, rgb).unwrap();
+        Appearance::start(settings, &frame, &Ellipse::new(40.0, 36.0, 14.0, 14.0, 0.0)).unwrap()
+    }
+
+    #[test]
+    fn the_log_ratio_bound_is_read_from_the_settings() {
+        let pixels = frame(SKIN, WALL);
+        let largest = |a: &Appearance| a.ratios.iter().fold(0.0f32, |m, r| m.max(r.abs()));
+        // The skin's bins are empty in the background: their log-ratio reaches the bound.
+        let bounded = start(AppearanceSettings::default(), &pixels);
+        assert_eq!(largest(&bounded), 3.0);
+        let mut s = AppearanceSettings::default();
+        s.histogram.max_log_ratio = 10.0;
+        let wide = start(s.clone(), &pixels);
+        assert!(
+            largest(&wide) > 3.0 && largest(&wide) <= 10.0,
+            "{}",
+            largest(&wide)
+        );
+        // A smaller floor sharpens the same ratios.
+        s.histogram.bin_floor = 1e-6;
+        assert!(largest(&start(s, &pixels)) > largest(&wide));
+    }
+
+    #[test]
+    fn the_hue_thresholds_and_the_chromatic_share_are_read_from_the_settings() {
+        let pixels = frame(SKIN, WALL);
+        let s = AppearanceSettings::default();
+        assert!(start(s.clone(), &pixels).bins.is_colour());
+        // Every pixel has a trusted hue (saturation ≥ 0.1): more than any share up to 1.
+        let mut all = s.clone();
+        all.histogram.min_chromatic_share = 1.0;
+        assert!(start(all, &pixels).bins.is_colour());
+        // A saturation threshold above every pixel's leaves no trusted hue: a grey frame.
+        let mut pale = s.clone();
+        pale.histogram.min_saturation = 0.9;
+        let a = start(pale, &pixels);
+        assert!(!a.bins.is_colour() && a.bins.len() == 2 * s.value_bins);
+    }
+
+    #[test]
+    fn the_lock_chain_reads_its_spread_and_centres_from_the_settings() {
+        let pixels = frame(SKIN, WALL);
+        let (grey, rgb) = &pixels;
+        let f = Frame::with_rgb(96, 72, grey, rgb).unwrap();
+        // One frame whose estimate lies on the wall.
+        let p_lost = |s: AppearanceSettings| {
+            let mut a = start(s, &pixels);
+            let wall = Ellipse::new(80.0, 15.0, 10.0, 10.0, 0.0);
+            a.read(&f, &wall);
+            a.observe(&wall).unwrap();
+            a.status().gamma_hat
+        };
+        let default = p_lost(AppearanceSettings::default());
+        assert!(default > 0.5, "{default}");
+        // A wide spread hardly tells the states apart: the persistence keeps the chain locked.
+        let wide = p_lost(AppearanceSettings {
+            lock_spread: 3.0,
+            ..AppearanceSettings::default()
+        });
+        assert!(wide < 0.1, "{wide}");
+        // A lost centre far below the wall's q makes it the locked state's evidence.
+        let low = p_lost(AppearanceSettings {
+            lock_centres: [0.5, -1.0],
+            ..AppearanceSettings::default()
+        });
+        assert!(low < 0.5, "{low}");
+    }
+
+    #[test]
+    fn the_background_similarity_bound_is_read_from_the_settings() {
+        // A target of the wall's colours: its background is as similar as can be.
+        let pixels = frame(WALL, WALL);
+        let a = start(AppearanceSettings::default(), &pixels);
+        assert_eq!(a.background_similarity, 0.9);
+        let a = start(
+            AppearanceSettings {
+                max_background_similarity: 0.5,
+                ..AppearanceSettings::default()
+            },
+            &pixels,
+        );
+        assert_eq!(a.background_similarity, 0.5);
+    }
+
+    #[test]
+    fn the_window_s_pixel_bound_is_read_from_the_settings() {
+        let pixels = frame(SKIN, WALL);
+        let (grey, rgb) = &pixels;
+        let f = Frame::with_rgb(96, 72, grey, rgb).unwrap();
+        let e = Ellipse::new(40.0, 36.0, 14.0, 14.0, 0.0);
+        let area = |s: &AppearanceSettings| {
+            let a = start(s.clone(), &pixels);
+            let mut window = WorkingWindow::default();
+            read_window(s, &mut window, &f, &a.bins, &e, true);
+            window.area(&e)
+        };
+        // The whole 96×72 frame is under 40 000 pixels: one window pixel per frame pixel.
+        let full = area(&AppearanceSettings::default());
+        assert!((full - std::f64::consts::PI * 196.0).abs() < 1e-9, "{full}");
+        // Under 1000 pixels it is read at √(6912 / 1000) frame pixels per window pixel.
+        let coarse = area(&AppearanceSettings {
+            max_window_pixels: 1000,
+            ..AppearanceSettings::default()
+        });
+        assert!((full / coarse - 6.912).abs() < 1e-9, "{coarse}");
+    }
+
+    #[test]
+    fn a_file_without_the_new_fields_loads_today_s_values() {
+        // The appearance section of a file written before the constants became settings.
+        let old: AppearanceSettings = toml::from_str(
+            "search = 3.0\nhs_bins = 8\ncolour_weight = 12.0\nlock_persistence = 0.95\n",
+        )
+        .unwrap();
+        assert_eq!(old, AppearanceSettings::default());
+        let d = &old.histogram;
+        assert_eq!(
+            (d.min_saturation, d.min_value, d.min_chromatic_share),
+            (0.1, 0.2, 0.02)
+        );
+        assert_eq!((d.bin_floor, d.max_log_ratio), (1e-3, 3.0));
+        assert_eq!((old.lock_spread, old.lock_centres), (0.3, [1.0, 0.0]));
+        assert_eq!(old.max_background_similarity, 0.9);
+        assert_eq!(old.max_window_pixels, 40_000);
+        // A histogram table may give only what it changes.
+        let one: AppearanceSettings = toml::from_str("[histogram]\nmax_log_ratio = 5.0\n").unwrap();
+        assert_eq!(
+            one.histogram,
+            HistogramSettings {
+                max_log_ratio: 5.0,
+                ..HistogramSettings::default()
+            }
+        );
+        let e = toml::from_str::<AppearanceSettings>("[histogram]\nbin_flor = 0.1\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bin_flor"), "{e}");
+    }
+
+    #[test]
+    fn lock_centres_out_of_order_are_refused_by_name() {
+        for centres in [[0.0, 1.0], [0.5, 0.5], [f64::NAN, 0.0]] {
+            let s = AppearanceSettings {
+                lock_centres: centres,
+                ..AppearanceSettings::default()
+            };
+            match s.validate() {
+                Err(Error::InvalidSetting { name, .. }) => {
+                    assert_eq!(name, "appearance.lock_centres")
+                }
+                other => panic!("{centres:?}: {other:?}"),
+            }
+        }
+        AppearanceSettings::default().validate().unwrap();
+    }
 }

@@ -10,6 +10,14 @@ use super::colour::ColourBins;
 use crate::Result;
 use crate::frame::Frame;
 
+// The two counts below set how finely an integral the model defines is computed, not the model:
+// the colour contrast is the sum of the log-ratios over the ellipse and the contour contrast the
+// mean grey contrast around it; more strips or points only come closer to those. Both are counted
+// on the target, which the working scale shrinks to a mean radius of 16 working pixels for `head`
+// (a smaller target is not enlarged), so their spacing does not grow with the footage's
+// resolution: about 3 working pixels between strips and between contour points of a round target
+// of that radius. They stay constants, not settings.
+
 /// Strips of the staircase that approximates an ellipse in [`WorkingWindow::ellipse_sums`].
 const STRIPS: usize = 10;
 /// Points on the contour read by [`WorkingWindow::edge_strength`].

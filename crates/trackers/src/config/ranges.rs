@@ -227,12 +227,29 @@ pub const SETTING_RANGES: &[SettingRange] = &[
     closed("appearance.target_rate", 0.0, 1.0),
     closed("appearance.background_rate", 0.0, 1.0),
     closed("appearance.template_rate", 0.0, 1.0),
+    // The saturation bins span the threshold to 1, so it stays clear of 1.
+    closed("appearance.histogram.min_saturation", 0.0, 0.9),
+    closed("appearance.histogram.min_value", 0.0, 1.0),
+    closed("appearance.histogram.min_chromatic_share", 0.0, 1.0),
+    positive("appearance.histogram.bin_floor", 1.0),
+    positive("appearance.histogram.max_log_ratio", 100.0),
     SettingRange {
         low_inclusive: false,
         high_inclusive: false,
         ..closed("appearance.lock_persistence", 0.5, 1.0)
     },
+    positive("appearance.lock_spread", 10.0),
+    // q is 1 for the first frame's target and 0 for its background: the locked centre near the
+    // one, the lost centre near the other (`validate` keeps the locked one above).
+    closed("appearance.lock_centres[0]", 0.5, 2.0),
+    closed("appearance.lock_centres[1]", -1.0, 0.5),
+    // Below 1 the rescaling of q = (ρ − ρ_bg) / (1 − ρ_bg) divides by 0.
+    SettingRange {
+        high_inclusive: false,
+        ..closed("appearance.max_background_similarity", 0.0, 1.0)
+    },
     closed("appearance.max_detection_centres", 1.0, 1e6),
+    closed("appearance.max_window_pixels", 1e3, 1e8),
     closed("appearance.calibration_scales", 0.5, 2.0),
 ];
 

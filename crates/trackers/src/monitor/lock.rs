@@ -1,18 +1,16 @@
 //! Whether the target is still held: a two-state chain (locked, lost) on dbn-switch's
 //! [`MarkovChain`], filtered forward (Wu Eq. 7–8 for a discrete state) on an observation q that is
 //! about 1 when the estimate looks like the target and about 0 when it looks like background.
-//! Each state reads q through a Gaussian (locked around 1, lost around 0); the chain keeps its
-//! state with the configured persistence. It is the appearance trackers' counterpart of Wu's
+//! Each state reads q through a Gaussian of a common spread (locked around a centre near 1, lost
+//! around one near 0); the chain keeps its state with the configured persistence. Persistence,
+//! spread and centres are the caller's: the appearance trackers' are settings
+//! (`AppearanceSettings::lock_persistence`, `lock_spread`, `lock_centres`). It is the appearance trackers' counterpart of Wu's
 //! status α (§6.3), which reads the contour likelihood instead.
 
 use dbn_switch::{MarkovChain, StatusEstimate, TrackStatus};
 
 use crate::{Error, Result};
 
-/// Spread of q under either state.
-const SPREAD: f64 = 0.3;
-/// The centres of q: locked, lost.
-const CENTRES: [f64; 2] = [1.0, 0.0];
 const LOCKED: usize = 0;
 const LOST: usize = 1;
 
@@ -20,16 +18,38 @@ const LOST: usize = 1;
 #[derive(Debug, Clone, PartialEq)]
 pub struct LockChain {
     chain: MarkovChain,
+    /// Spread of q under either state.
+    spread: f64,
+    /// The centres of q: locked, lost.
+    centres: [f64; 2],
     belief: [f64; 2],
     predicted: [f64; 2],
 }
 
 impl LockChain {
-    /// A chain that starts locked and keeps its state with probability `persistence`.
+    /// A chain that starts locked and keeps its state with probability `persistence`, and
+    /// reads q through N(q; `centres[0]`, `spread`²) when locked and N(q; `centres[1]`,
+    /// `spread`²) when lost.
     ///
     /// # Errors
-    /// A persistence outside (0, 1).
-    pub fn new(persistence: f64) -> Result<Self> {
+    /// A persistence outside [0, 1], a spread that is not positive and finite, or centres that
+    /// are not finite with the locked one above the lost one.
+    pub fn new(persistence: f64, spread: f64, centres: [f64; 2]) -> Result<Self> {
+        if !(spread > 0.0 && spread.is_finite()) {
+            return Err(Error::InvalidSetting {
+                name: "lock spread",
+                reason: format!("{spread} must be positive and finite"),
+            });
+        }
+        let [locked, lost] = centres;
+        if !(locked.is_finite() && lost.is_finite() && locked > lost) {
+            return Err(Error::InvalidSetting {
+                name: "lock centres",
+                reason: format!(
+                    "[{locked}, {lost}] must be finite, the locked centre above the lost one"
+                ),
+            });
+        }
         let leave = 1.0 - persistence;
         let chain =
             MarkovChain::new(&[[persistence, leave], [leave, persistence]]).map_err(|e| {
@@ -40,6 +60,8 @@ impl LockChain {
             })?;
         Ok(Self {
             chain,
+            spread,
+            centres,
             belief: [1.0, 0.0],
             predicted: [1.0, 0.0],
         })
@@ -49,7 +71,7 @@ impl LockChain {
     /// it is not. The Gaussian log-likelihoods are scaled by their maximum before they are
     /// exponentiated, so that a q far from both centres cannot underflow both to zero.
     pub fn observe(&mut self, q: f64) {
-        let log = CENTRES.map(|c| -0.5 * ((q - c) / SPREAD).powi(2));
+        let log = self.centres.map(|c| -0.5 * ((q - c) / self.spread).powi(2));
         let top = log[0].max(log[1]);
         let likelihood = log.map(|l| {
             if top.is_finite() {
@@ -102,7 +124,7 @@ mod tests {
 
     #[test]
     fn a_run_of_background_raises_p_lost_and_a_match_lowers_it() {
-        let mut chain = LockChain::new(0.95).unwrap();
+        let mut chain = LockChain::new(0.95, 0.3, [1.0, 0.0]).unwrap();
         for _ in 0..5 {
             chain.observe(0.95);
         }
@@ -122,7 +144,7 @@ mod tests {
 
     #[test]
     fn one_step_is_bayes_rule_and_extreme_observations_stay_finite() {
-        let mut chain = LockChain::new(0.9).unwrap();
+        let mut chain = LockChain::new(0.9, 0.3, [1.0, 0.0]).unwrap();
         chain.observe(0.4);
         // Prior after one step from locked: (0.9, 0.1); likelihoods N(0.4; 1, 0.3), N(0.4; 0, 0.3).
         let (l0, l1) = (
@@ -139,7 +161,49 @@ mod tests {
             );
         }
         // A chain that never leaves its state is still a chain; a probability above 1 is not.
-        assert!(LockChain::new(1.0).is_ok());
-        assert!(LockChain::new(1.5).is_err() && LockChain::new(f64::NAN).is_err());
+        let new = |p| LockChain::new(p, 0.3, [1.0, 0.0]);
+        assert!(new(1.0).is_ok());
+        assert!(new(1.5).is_err() && new(f64::NAN).is_err());
+    }
+
+    #[test]
+    fn spread_and_centres_are_the_callers() {
+        // The same observation under other spreads and centres: Bayes' rule with those.
+        for (spread, centres, q) in [
+            (0.3, [1.0, 0.0], 0.4),
+            (0.1, [1.0, 0.0], 0.4),
+            (0.5, [0.8, 0.1], 0.4),
+            (0.3, [0.7, -0.2], 0.9),
+        ] {
+            let mut chain = LockChain::new(0.9, spread, centres).unwrap();
+            chain.observe(q);
+            let l = centres.map(|c: f64| (-0.5 * ((q - c) / spread).powi(2)).exp());
+            let expected = 0.1 * l[1] / (0.9 * l[0] + 0.1 * l[1]);
+            assert!(
+                (chain.p_lost() - expected).abs() < 1e-12,
+                "{spread} {centres:?}: {} against {expected}",
+                chain.p_lost()
+            );
+        }
+        // q = 0.6 is nearer the locked centre at [1, 0], nearer the lost one at [1.4, 0.5].
+        let p = |centres| {
+            let mut chain = LockChain::new(0.5, 0.3, centres).unwrap();
+            chain.observe(0.6);
+            chain.p_lost()
+        };
+        assert!(p([1.0, 0.0]) < 0.5 && p([1.4, 0.5]) > 0.5);
+        for spread in [0.0, -0.3, f64::NAN, f64::INFINITY] {
+            let e = LockChain::new(0.95, spread, [1.0, 0.0]).unwrap_err();
+            assert!(e.to_string().contains("lock spread"), "{e}");
+        }
+        for centres in [
+            [0.0, 1.0],
+            [0.5, 0.5],
+            [f64::NAN, 0.0],
+            [1.0, f64::NEG_INFINITY],
+        ] {
+            let e = LockChain::new(0.95, 0.3, centres).unwrap_err();
+            assert!(e.to_string().contains("lock centres"), "{e}");
+        }
     }
 }

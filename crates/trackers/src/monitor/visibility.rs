@@ -40,6 +40,10 @@ const Q_RANGE: (f64, f64) = (-1.0, 2.0);
 const MIN_PLACEMENTS: usize = 6;
 /// Persistence of the seen/unseen chain.
 const PERSISTENCE: f64 = 0.95;
+/// Spread of q under either state, and its centres (seen, unseen): q is scaled so that the two
+/// z's above map to 1 and 0, read as the appearance trackers' lock chain reads its q by default.
+const SPREAD: f64 = 0.3;
+const CENTRES: [f64; 2] = [1.0, 0.0];
 
 /// The seen/unseen chain of one track.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,7 +58,7 @@ impl Visibility {
     /// None in practice: the persistence is a valid constant.
     pub fn new() -> crate::Result<Self> {
         Ok(Self {
-            chain: LockChain::new(PERSISTENCE)?,
+            chain: LockChain::new(PERSISTENCE, SPREAD, CENTRES)?,
         })
     }
 
