@@ -69,7 +69,8 @@ pub struct MotionSettings {
 }
 
 /// The default of [`MotionSettings::working_radius`], the same as `head`'s whole-tracker
-/// working radius ([`HEAD_WORKING_RADIUS`]): Odobez's and Wu's heads are of this size.
+/// working radius ([`HEAD_WORKING_RADIUS`]), so that every preset sees the target's motion at
+/// one resolution.
 pub const MOTION_WORKING_RADIUS: f64 = HEAD_WORKING_RADIUS;
 
 fn default_motion_working_radius() -> Option<f64> {

@@ -226,7 +226,7 @@ impl smc_core::Proposal for MotionProposal<'_> {
     }
 
     /// The density of the particle's component: the jump (share η, identical to the prior's, see
-    /// [`crate::dynamics::reacquisition`]) or the continuation below, times 1 − η; less the hidden chains'
+    /// [`ReacquisitionSettings`](crate::ReacquisitionSettings)) or the continuation below, times 1 − η; less the hidden chains'
     /// exploration ratio (`TrackerDynamics::log_hidden_exploration_ratio`, 0 by default).
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
         self.dynamics.log_with_jump(previous, next, || {
