@@ -1,7 +1,8 @@
 //! The target's appearance: its colour against its background's and its grey template, read in
 //! a window around the target (in the tracker's working pixels) and learnt from the frames where the target is
-//! held. Three observation terms read it, each a log-likelihood added to the particle's weight
-//! (Odobez's object likelihood p_o, Eq. 18, "shape or colour"):
+//! held. Three observation terms can read it, each a log-likelihood added to the particle's
+//! weight (Odobez's object likelihood p_o, Eq. 18, "shape or colour"); `head` uses the first
+//! two (the third's weight is 0 by default, [`AppearanceSettings::contour_weight`]):
 //!
 //! - **colour contrast** (`WorkingWindow::contrast`): each pixel's log-ratio
 //!   ln(p_target / p_background) of its HSV bin (Pérez et al. 2002's bins; grey levels for grey
@@ -49,7 +50,10 @@ pub struct AppearanceSettings {
     pub colour_weight: f64,
     /// Weight of the template term, nats per unit of ρ (default 40).
     pub template_weight: f64,
-    /// Weight of the contour contrast, nats per unit (default 1).
+    /// Weight of the contour contrast, nats per unit (default 0: the term is off). Measured on
+    /// the real development set under TRE and SRE, a weight of 1 helped no sequence and cost up
+    /// to two (docs/RESULTS.md, decision log), so `head` leaves it out; it stays a term a
+    /// configuration can turn on.
     pub contour_weight: f64,
     /// Samples across the template's disc, a grid of this many squared clipped to the disc
     /// (default 12).
@@ -152,7 +156,7 @@ impl Default for AppearanceSettings {
             background_ring: [1.25, 2.0],
             colour_weight: 12.0,
             template_weight: 40.0,
-            contour_weight: 1.0,
+            contour_weight: 0.0,
             template_grid: 12,
             learnt_share: 0.5,
             target_rate: 0.02,

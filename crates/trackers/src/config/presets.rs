@@ -42,7 +42,7 @@ pub enum Preset {
     /// status processes.
     Full,
     /// The recommended tracker for real footage: the appearance terms ([`crate::appearance`]:
-    /// colour contrast, template, contour contrast) with Odobez's Gaussian AR2 prior, at a
+    /// colour contrast and template) with Odobez's Gaussian AR2 prior, at a
     /// working scale set by the target's size, with the lock chain.
     Head,
 }
@@ -111,7 +111,7 @@ impl Preset {
             Preset::WEval => "Wu: clutter HMM and the status HMM {alpha, gamma}, reacquisition",
             Preset::Full => "Odobez's motion proposal with all of Wu's hidden processes",
             Preset::Head => {
-                "recommended for real footage: colour, NCC template and contour contrast, lost/locked chain"
+                "recommended for real footage: colour contrast and NCC template, lost/locked chain"
             }
         }
     }
