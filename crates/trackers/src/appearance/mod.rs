@@ -28,7 +28,7 @@ use crate::{Error, Result};
 use colour::{ColourBins, Histogram, is_chromatic, log_ratios};
 use window::WorkingWindow;
 
-/// Settings of the appearance model and its three terms. Every field has a default, so a
+/// Settings of the appearance model and its three terms (the third off by default). Every field has a default, so a
 /// configuration file may give only what it changes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
