@@ -371,13 +371,25 @@ impl Appearance {
     }
 
     /// The centre of the best appearance score (colour contrast and template, with their
-    /// weights) of an ellipse of half-axes `axes` over a grid of centres spanning the window
-    /// last read, spaced a quarter of the target's geometric-mean half-axis apart (coarser when
+    /// weights) of an ellipse of half-axes `axes` over a grid of centres whose ellipse lies
+    /// inside the window last read (its middle when the window is narrower), spaced a quarter of the target's geometric-mean half-axis apart (coarser when
     /// that would exceed [`AppearanceSettings::max_detection_centres`]); `None` for an empty
     /// grid. Where the reacquisition component draws while the target is not held.
     pub fn detect(&self, axes: (f64, f64)) -> Option<[f64; 2]> {
         let s = &self.settings;
-        let [x0, y0, x1, y1] = self.window.bounds();
+        let [w0, v0, w1, v1] = self.window.bounds();
+        // Centres whose ellipse lies inside the window: one that reaches past it is scored on
+        // the part that was read, and an ellipse half outside the frame, with no ring around that
+        // half, outscores the target. A window narrower than the ellipse has its middle only.
+        let inside = |lo: f64, hi: f64, half_axis: f64| {
+            if hi - lo >= 2.0 * half_axis {
+                (lo + half_axis, hi - half_axis)
+            } else {
+                (0.5 * (lo + hi), 0.5 * (lo + hi))
+            }
+        };
+        let (x0, x1) = inside(w0, w1, axes.0);
+        let (y0, y1) = inside(v0, v1, axes.1);
         let half = (axes.0 * axes.1).sqrt();
         let cells = ((x1 - x0) * (y1 - y0)).max(0.0);
         let stride = (0.25 * half).max((cells / s.max_detection_centres as f64).sqrt());
@@ -386,10 +398,10 @@ impl Appearance {
         }
         let mut samples = self.samples();
         let mut best: Option<([f64; 2], f64)> = None;
-        let mut y = y0 + 0.5 * stride;
-        while y < y1 {
-            let mut x = x0 + 0.5 * stride;
-            while x < x1 {
+        let mut y = y0;
+        while y <= y1 {
+            let mut x = x0;
+            while x <= x1 {
                 let e = Ellipse::new(x, y, axes.0, axes.1, 0.0);
                 let mut score = s.colour_weight * self.colour_contrast(&e);
                 if s.template_weight > 0.0 {
@@ -642,6 +654,41 @@ mod tests {
             ..AppearanceSettings::default()
         });
         assert!((full / coarse - 6.912).abs() < 1e-9, "{coarse}");
+    }
+
+    #[test]
+    fn a_detection_lies_inside_the_window_even_when_the_target_is_cut_by_the_frame() {
+        // The target learnt in the middle of the frame, then searched for over the whole frame
+        // with its centre 3 px from the left border: the detection's ellipse must lie inside
+        // the frame (scored on pixels that were read), next to the border, on the target's row.
+        let a0 = start(AppearanceSettings::default(), &frame(SKIN, WALL));
+        let (mut grey, mut rgb) = (Vec::new(), Vec::new());
+        for i in 0..96 * 72 {
+            let (x, y) = ((i % 96) as f64, (i / 96) as f64);
+            let inside = (x - 3.0).powi(2) + (y - 36.0).powi(2) < 14.0 * 14.0;
+            let t = 20.0 * ((0.7 * x).sin() * (0.9 * y).cos());
+            let p = if inside { SKIN } else { WALL }.map(|c| (c + t).clamp(0.0, 255.0) as u8);
+            rgb.extend(p);
+            grey.push(0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2]));
+        }
+        let f = Frame::with_rgb(96, 72, &grey, &rgb).unwrap();
+        let mut a = a0;
+        // An estimate on the wall says "lost"; the next read then covers the whole frame.
+        let e = Ellipse::new(40.0, 36.0, 14.0, 14.0, 0.0);
+        a.read(&f, &e);
+        a.observe(&e).unwrap();
+        assert!(a.lock.p_lost() > 0.5);
+        a.read(&f, &e);
+        let [x0, y0, x1, y1] = a.window.bounds();
+        assert_eq!([x0, y0, x1, y1], [0.0, 0.0, 96.0, 72.0]);
+        let [cx, cy] = a.detect((14.0, 14.0)).unwrap();
+        assert!(cx - 14.0 >= x0 && cx + 14.0 <= x1, "{cx}");
+        assert!(cy - 14.0 >= y0 && cy + 14.0 <= y1, "{cy}");
+        // Inside, the nearest place to the cut target.
+        assert!(
+            cx < 14.0 + 14.0 * 0.25 + 1e-9 && (cy - 36.0).abs() <= 4.0,
+            "{cx}, {cy}"
+        );
     }
 
     #[test]
