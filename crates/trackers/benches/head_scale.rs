@@ -1,8 +1,10 @@
-//! Cost of one `head` update against the target's and the frame's size: a
-//! 640×480 frame with a 150×200 px head against a 320×240 frame with a 50×60 px head, 200
-//! particles, one thread. The frames are real when the development set sits beside the checkout
-//! (`../shared/data/real/Boy/img/0001.jpg`, and the same frame halved), synthetic texture
-//! otherwise; each update tracks the same frame again, so the cost is the steady state.
+//! Cost of one update against the target's and the frame's size: a 640×480 frame with a
+//! 150×200 px head against a 320×240 frame with a 50×60 px head, 200 particles, one thread, for
+//! `head` and for the presets that estimate motion (`m3`, `full`, whose motion is estimated at a
+//! working scale set by the target's size). The frames are real when the development set sits
+//! beside the checkout (`../shared/data/real/Boy/img/0001.jpg`, and the same frame halved),
+//! synthetic texture otherwise; each update tracks the same frame again, so the cost is the
+//! steady state (for `m3` and `full`, of estimating a zero motion).
 
 use std::hint::black_box;
 use std::path::Path;
@@ -30,8 +32,8 @@ fn rgb_frame(w: u32, h: u32) -> (Vec<u8>, &'static str) {
     (out, "synthetic")
 }
 
-fn head_scale(c: &mut Criterion) {
-    let mut group = c.benchmark_group("head_update_200_particles");
+fn update_against_size(c: &mut Criterion, preset: Preset) {
+    let mut group = c.benchmark_group(format!("{}_update_200_particles", preset.name()));
     group.throughput(Throughput::Elements(1));
     group.sample_size(30);
     for (w, h, head_w, head_h) in [(320u32, 240u32, 50.0, 60.0), (640, 480, 150.0, 200.0)] {
@@ -51,7 +53,7 @@ fn head_scale(c: &mut Criterion) {
             b: head_h / 2.0,
             angle: 0.0,
         };
-        let Ok(mut tracker) = build(Preset::Head.config(200, 1)) else {
+        let Ok(mut tracker) = build(preset.config(200, 1)) else {
             continue;
         };
         if tracker.init(frame, start).is_err() {
@@ -67,7 +69,9 @@ fn head_scale(c: &mut Criterion) {
 
 fn benches() {
     let mut c = Criterion::default().configure_from_args();
-    head_scale(&mut c);
+    for preset in [Preset::Head, Preset::M3, Preset::Full] {
+        update_against_size(&mut c, preset);
+    }
 }
 
 criterion_main!(benches);
