@@ -260,20 +260,24 @@ impl TrackerDynamics {
         clutter + status
     }
 
-    /// Draws the kinematic part x_k ~ p(x_k | x_{k−1}, x_{k−2}).
-    pub fn sample_kinematics<R: Rng + ?Sized>(
-        &self,
-        previous: &Particle,
-        rng: &mut R,
-    ) -> StateVector {
+    /// The mean and the noise scales of p(x_k | x_{k−1}, x_{k−2}).
+    fn kinematic_law(&self, previous: &Particle) -> (StateVector, StateVector) {
         let mean = self.settings.predict(
             self.space,
             &previous.now,
             &previous.prev,
             self.shape_anchor.as_ref(),
         );
-        let sigma = self.settings.sigmas(self.space, &previous.now);
-        let mut x = mean;
+        (mean, self.settings.sigmas(self.space, &previous.now))
+    }
+
+    /// Draws the kinematic part x_k ~ p(x_k | x_{k−1}, x_{k−2}).
+    pub fn sample_kinematics<R: Rng + ?Sized>(
+        &self,
+        previous: &Particle,
+        rng: &mut R,
+    ) -> StateVector {
+        let (mut x, sigma) = self.kinematic_law(previous);
         for j in 0..self.space.dim() {
             x[j] += sigma[j] * self.settings.noise.sample(rng);
         }
@@ -283,13 +287,7 @@ impl TrackerDynamics {
 
     /// log p(x_k | x_{k−1}, x_{k−2}) of the kinematic part (Odobez Eq. 17 for Cauchy noise).
     pub fn log_kinematic_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        let mean = self.settings.predict(
-            self.space,
-            &previous.now,
-            &previous.prev,
-            self.shape_anchor.as_ref(),
-        );
-        let sigma = self.settings.sigmas(self.space, &previous.now);
+        let (mean, sigma) = self.kinematic_law(previous);
         (0..self.space.dim())
             .map(|j| {
                 self.settings

@@ -48,9 +48,7 @@ impl MotionFrames {
         target: &Ellipse,
         working_radius: Option<f64>,
     ) -> Result<()> {
-        self.scale = working_radius.map_or(WorkingScale::IDENTITY, |r| {
-            WorkingScale::for_target(target, r)
-        });
+        self.scale = WorkingScale::for_radius(target, working_radius);
         self.shrinker = Shrinker::for_frames(self.scale, frame.width(), frame.height());
         self.build(estimator, frame)
     }

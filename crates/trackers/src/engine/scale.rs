@@ -51,6 +51,11 @@ impl WorkingScale {
         }
     }
 
+    /// [`WorkingScale::for_target`] with `working_radius`, or the identity without one.
+    pub fn for_radius(target: &Ellipse, working_radius: Option<f64>) -> Self {
+        working_radius.map_or(Self::IDENTITY, |r| Self::for_target(target, r))
+    }
+
     /// Frame pixels per working pixel (≥ 1).
     pub fn factor(&self) -> f64 {
         self.factor
@@ -340,10 +345,7 @@ impl Tracker for ScaledTracker {
 
     fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate> {
         let ellipse = self.inner.config().initial_ellipse(&ellipse)?;
-        self.scale = match self.inner.config().working_radius {
-            Some(r) => WorkingScale::for_target(&ellipse, r),
-            None => WorkingScale::IDENTITY,
-        };
+        self.scale = WorkingScale::for_radius(&ellipse, self.inner.config().working_radius);
         self.shrinker = Shrinker::for_frames(self.scale, frame.width(), frame.height());
         let working = self.scale.to_working(&ellipse);
         self.on_working_frame(frame, |inner, f| inner.init(f, working))
