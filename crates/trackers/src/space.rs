@@ -160,6 +160,18 @@ impl ShapeSpace {
         }
     }
 
+    /// The elongation bounds of [`ShapeBounds::aspect`] for a target whose initial elongation is
+    /// `e0`: `range` (relative to `e0`, as `DynamicsSettings::aspect_range`) times `e0`, within
+    /// [1/4, 4] and always holding `e0`. Odobez's e = width / height is below 1 for a tall
+    /// target, so its upper bound may be below 1 too; the affine elongation is at least 1.
+    pub fn elongation_bounds(self, e0: f64, range: [f64; 2]) -> (f64, f64) {
+        let (lo, hi) = (range[0] * e0, range[1] * e0);
+        match self {
+            ShapeSpace::Odobez => (lo.max(0.25).min(e0), hi.min(4.0).max(e0)),
+            ShapeSpace::Affine => (lo.max(0.25), hi.clamp(1.0, 4.0)),
+        }
+    }
+
     /// The elongation of a state: e for Odobez, the ratio of the singular values of A (≥ 1)
     /// for affine.
     pub fn elongation(self, x: &StateVector) -> f64 {
@@ -244,6 +256,29 @@ pub(crate) fn check_initial(ellipse: &Ellipse) -> crate::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn elongation_bounds_are_relative_to_the_initial_elongation_whichever_way_it_leans() {
+        // A tall target (Odobez e = width / height = 0.7): the range [1, 1] fixes e, and the
+        // default [0.33, 3] reaches above and below e0 alike. The bound was once clamped to at
+        // least 1, so a tall target's aspect could always drift to a round one.
+        let o = ShapeSpace::Odobez;
+        assert_eq!(o.elongation_bounds(0.7, [1.0, 1.0]), (0.7, 0.7));
+        let (lo, hi) = o.elongation_bounds(0.7, [0.9, 1.1]);
+        assert!((lo - 0.63).abs() < 1e-12 && (hi - 0.77).abs() < 1e-12);
+        let (lo, hi) = o.elongation_bounds(0.2, [0.33, 3.0]);
+        assert!(
+            (lo - 0.2).abs() < 1e-12 && (hi - 0.6).abs() < 1e-12,
+            "{lo} {hi}"
+        );
+        // Past [1/4, 4] the bounds stop there but still hold e0.
+        let (lo, hi) = o.elongation_bounds(10.0, [0.33, 3.0]);
+        assert!((lo - 3.3).abs() < 1e-12 && hi == 10.0, "{lo} {hi}");
+        // The affine elongation is a ratio of singular values, at least 1.
+        let (_, hi) = ShapeSpace::Affine.elongation_bounds(1.0, [0.33, 3.0]);
+        assert_eq!(hi, 3.0);
+        assert_eq!(ShapeSpace::Affine.elongation_bounds(1.0, [1.0, 1.0]).1, 1.0);
+    }
 
     #[test]
     fn odobez_round_trip_of_an_axis_aligned_ellipse() {

@@ -268,10 +268,7 @@ impl Tracker for ParticleTracker {
                 (d.scale_range[0] * s0).max(min),
                 (d.scale_range[1] * s0).max(min),
             ),
-            aspect: (
-                (d.aspect_range[0] * e0).max(0.25),
-                (d.aspect_range[1] * e0).clamp(1.0, 4.0),
-            ),
+            aspect: space.elongation_bounds(e0, d.aspect_range),
             centre: self.centre_bounds(&frame),
         };
         let sigmas = self.dynamics.settings.sigmas(space, &centre);
