@@ -164,7 +164,7 @@ impl ShapeSpace {
     /// `e0`: `range` (relative to `e0`, as `DynamicsSettings::aspect_range`) times `e0`, within
     /// [1/4, 4] and always holding `e0`. Odobez's e = width / height is below 1 for a tall
     /// target, so its upper bound may be below 1 too; the affine elongation is at least 1.
-    pub fn elongation_bounds(self, e0: f64, range: [f64; 2]) -> (f64, f64) {
+    pub(crate) fn elongation_bounds(self, e0: f64, range: [f64; 2]) -> (f64, f64) {
         let (lo, hi) = (range[0] * e0, range[1] * e0);
         match self {
             ShapeSpace::Odobez => (lo.max(0.25).min(e0), hi.min(4.0).max(e0)),
