@@ -269,8 +269,13 @@ impl Preset {
                 appearance: Some(AppearanceSettings::default()),
                 working_radius: Some(HEAD_WORKING_RADIUS),
                 // The lock chain alone says whether the target is held: a face that grows as it
-                // nears the camera is not lost.
-                reacquisition: Some(ReacquisitionSettings::default()),
+                // nears the camera is not lost. The jump is drawn around the appearance's
+                // detection, not around an extrapolation whose error grows with the gap, so its
+                // spread does not grow (docs/RESULTS.md, decision log).
+                reacquisition: Some(ReacquisitionSettings {
+                    spread_growth: 0.0,
+                    ..ReacquisitionSettings::default()
+                }),
                 ..base
             },
         }

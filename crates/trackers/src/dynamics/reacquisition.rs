@@ -54,7 +54,9 @@ pub struct ReacquisitionSettings {
     pub max_share: f64,
     /// Translation spread of the jump at the first unlocked frame, pixels.
     pub spread: f64,
-    /// Growth of the translation spread per unlocked frame, pixels.
+    /// Growth of the translation spread per unlocked frame, pixels: the extrapolation's error
+    /// grows with the gap. `head` sets it to 0, its jump being centred on the appearance's
+    /// detection rather than on an extrapolation.
     pub spread_growth: f64,
     /// Gain of the position in the constant-velocity memory of the locked estimates (α of an
     /// α–β filter).
