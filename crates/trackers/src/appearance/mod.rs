@@ -371,16 +371,19 @@ impl Appearance {
     }
 
     /// The centre of the best appearance score (colour contrast and template, with their
-    /// weights) of an ellipse of half-axes `axes` over a grid of centres whose ellipse lies
-    /// inside the window last read (its middle when the window is narrower), spaced a quarter of the target's geometric-mean half-axis apart (coarser when
-    /// that would exceed [`AppearanceSettings::max_detection_centres`]); `None` for an empty
-    /// grid. Where the reacquisition component draws while the target is not held.
+    /// weights) of an ellipse of half-axes `axes` over a grid of centres whose ellipse and
+    /// contrast ring ([`AppearanceSettings::contrast_ring`]) lie inside the window last read
+    /// (its middle when the window is narrower), spaced a quarter of the target's
+    /// geometric-mean half-axis apart (coarser when that would exceed
+    /// [`AppearanceSettings::max_detection_centres`]); `None` for an empty grid. Where the
+    /// reacquisition component draws while the target is not held.
     pub fn detect(&self, axes: (f64, f64)) -> Option<[f64; 2]> {
         let s = &self.settings;
         let [w0, v0, w1, v1] = self.window.bounds();
-        // Centres whose ellipse lies inside the window: one that reaches past it is scored on
-        // the part that was read, and an ellipse half outside the frame, with no ring around that
-        // half, outscores the target. A window narrower than the ellipse has its middle only.
+        // Centres whose ellipse and contrast ring lie inside the window: a hypothesis that
+        // reaches past it is scored on the part that was read, and an ellipse at the frame's
+        // edge, with no ring beyond the edge to count against it, outscores the target. A
+        // window narrower than the ring has its middle only.
         let inside = |lo: f64, hi: f64, half_axis: f64| {
             if hi - lo >= 2.0 * half_axis {
                 (lo + half_axis, hi - half_axis)
@@ -388,8 +391,8 @@ impl Appearance {
                 (0.5 * (lo + hi), 0.5 * (lo + hi))
             }
         };
-        let (x0, x1) = inside(w0, w1, axes.0);
-        let (y0, y1) = inside(v0, v1, axes.1);
+        let (x0, x1) = inside(w0, w1, s.contrast_ring * axes.0);
+        let (y0, y1) = inside(v0, v1, s.contrast_ring * axes.1);
         let half = (axes.0 * axes.1).sqrt();
         let cells = ((x1 - x0) * (y1 - y0)).max(0.0);
         let stride = (0.25 * half).max((cells / s.max_detection_centres as f64).sqrt());
@@ -659,13 +662,14 @@ mod tests {
     #[test]
     fn a_detection_lies_inside_the_window_even_when_the_target_is_cut_by_the_frame() {
         // The target learnt in the middle of the frame, then searched for over the whole frame
-        // with its centre 3 px from the left border: the detection's ellipse must lie inside
-        // the frame (scored on pixels that were read), next to the border, on the target's row.
+        // with its centre 12 px from the left border: the detection's ellipse and its contrast
+        // ring must lie inside the frame (scored on pixels that were read), next to the border,
+        // on the target's row.
         let a0 = start(AppearanceSettings::default(), &frame(SKIN, WALL));
         let (mut grey, mut rgb) = (Vec::new(), Vec::new());
         for i in 0..96 * 72 {
             let (x, y) = ((i % 96) as f64, (i / 96) as f64);
-            let inside = (x - 3.0).powi(2) + (y - 36.0).powi(2) < 14.0 * 14.0;
+            let inside = (x - 12.0).powi(2) + (y - 36.0).powi(2) < 14.0 * 14.0;
             let t = 20.0 * ((0.7 * x).sin() * (0.9 * y).cos());
             let p = if inside { SKIN } else { WALL }.map(|c| (c + t).clamp(0.0, 255.0) as u8);
             rgb.extend(p);
@@ -682,11 +686,12 @@ mod tests {
         let [x0, y0, x1, y1] = a.window.bounds();
         assert_eq!([x0, y0, x1, y1], [0.0, 0.0, 96.0, 72.0]);
         let [cx, cy] = a.detect((14.0, 14.0)).unwrap();
-        assert!(cx - 14.0 >= x0 && cx + 14.0 <= x1, "{cx}");
-        assert!(cy - 14.0 >= y0 && cy + 14.0 <= y1, "{cy}");
+        let reach = 14.0 * a.settings.contrast_ring;
+        assert!(cx - reach >= x0 && cx + reach <= x1, "{cx}");
+        assert!(cy - reach >= y0 && cy + reach <= y1, "{cy}");
         // Inside, the nearest place to the cut target.
         assert!(
-            cx < 14.0 + 14.0 * 0.25 + 1e-9 && (cy - 36.0).abs() <= 4.0,
+            cx < reach + 14.0 * 0.25 + 1e-9 && (cy - 36.0).abs() <= 4.0,
             "{cx}, {cy}"
         );
     }
