@@ -36,7 +36,8 @@ pub struct AppearanceSettings {
     /// Half-size of the window around the last estimate, in its half-axes (default 3). The
     /// detection ([`Appearance::detect`]) scores centres whose contrast ring lies inside the
     /// window, so it searches `search − contrast_ring` half-axes each way around the estimate
-    /// (1.5 by default), and only the estimate itself when `search` ≤ `contrast_ring`.
+    /// (1.5 by default) where the frame does not cut the window, and only the window's middle
+    /// when `search` ≤ `contrast_ring`.
     pub search: f64,
     /// Hue and saturation bins of the colour histogram (each; default 8).
     pub hs_bins: usize,
