@@ -384,10 +384,10 @@ impl Appearance {
     pub fn detect(&self, axes: (f64, f64)) -> Option<[f64; 2]> {
         let s = &self.settings;
         let [w0, v0, w1, v1] = self.window.bounds();
-        // Centres whose ellipse and contrast ring lie inside the window: a hypothesis that
-        // reaches past it is scored on the part that was read, and an ellipse at the frame's
-        // edge, with no ring beyond the edge to count against it, outscores the target. A
-        // window narrower than the ring has its middle only.
+        // Centres whose ellipse and contrast ring lie inside the window: the detection compares
+        // hypotheses with one another, so it scores only those whose whole support was read,
+        // each on the same evidence (one reaching past the window is judged on fewer pixels,
+        // and its score is the noisier). A window narrower than the ring has its middle only.
         let inside = |lo: f64, hi: f64, half_axis: f64| {
             if hi - lo >= 2.0 * half_axis {
                 (lo + half_axis, hi - half_axis)

@@ -185,12 +185,15 @@ impl WorkingWindow {
 
     /// The sums of each of `integrals`' values (the log-ratios, their positive parts) over the
     /// ellipse, in working pixels, approximated by one staircase of horizontal strips (exact for
-    /// the strips, each as wide as the ellipse at its middle row), and the ellipse's area in
-    /// working pixels.
+    /// the strips, each as wide as the ellipse at its middle row), and the area of the ellipse
+    /// that was read, in working pixels: its area times the share of the staircase inside the
+    /// window (all of it for an ellipse inside the window).
     fn ellipse_sums<const K: usize>(&self, integrals: [&[f64]; K], e: &Ellipse) -> ([f64; K], f64) {
         let (cx, cy, a, b) = self.to_working(e);
+        let (w, h) = (self.width as f64, self.height as f64);
         let dy = 2.0 * b / STRIPS as f64;
         let mut sums = [0.0; K];
+        let (mut staircase, mut read) = (0.0, 0.0);
         for k in 0..STRIPS {
             let y0 = cy - b + k as f64 * dy;
             let mid = (y0 + 0.5 * dy - cy) / b;
@@ -198,8 +201,26 @@ impl WorkingWindow {
             for (sum, integral) in sums.iter_mut().zip(integrals) {
                 *sum += self.box_sum(integral, cx - half, y0, cx + half, y0 + dy);
             }
+            // The strip's part inside the window; exactly the strip when none is cut off.
+            let width = if cx - half >= 0.0 && cx + half <= w {
+                2.0 * half
+            } else {
+                ((cx + half).min(w) - (cx - half).max(0.0)).max(0.0)
+            };
+            let height = if y0 >= 0.0 && y0 + dy <= h {
+                dy
+            } else {
+                ((y0 + dy).min(h) - y0.max(0.0)).max(0.0)
+            };
+            staircase += 2.0 * half * dy;
+            read += width * height;
         }
-        (sums, std::f64::consts::PI * a * b)
+        let share = if staircase > 0.0 {
+            read / staircase
+        } else {
+            0.0
+        };
+        (sums, std::f64::consts::PI * a * b * share)
     }
 
     /// The colour contrast of the ellipse `e`, in nats per pixel of the reference area:
@@ -213,7 +234,10 @@ impl WorkingWindow {
     ///   times larger: target-like pixels just outside the contour say the hypothesis is too small
     ///   or off-centre. Only the positive part counts, so that pushing the ring from hair onto
     ///   an even more background-like wall earns nothing (the mean of the signed log-ratios
-    ///   there made every estimate grow over hair and neck).
+    ///   there made every estimate grow over hair and neck). The mean is over the part of the
+    ///   ring that was read: pixels beyond the window (or the frame) give no evidence, and
+    ///   counted as zeros they would dilute the mean, so that a hypothesis at the frame's edge,
+    ///   with half its ring unread, would outscore the target.
     pub fn contrast(&self, e: &Ellipse, ring: f64, reference: f64) -> f64 {
         let ([inner, inner_positive], area) =
             self.ellipse_sums([&self.integral, &self.integral_positive], e);
@@ -324,5 +348,35 @@ impl WorkingWindow {
             }
         }
         (inside, around)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_ring_mean_is_taken_over_the_part_of_the_ring_that_was_read() {
+        // Every pixel of a 64×48 frame gives the same evidence, 0.5 nats. The ring's mean must
+        // be 0.5 wherever the hypothesis sits: in the middle, and at the frame's left edge, where
+        // a third of the ring lies beyond the frame. Counted as zeros, the unread part would pull
+        // the mean down (to about 0.3 here) and favour hypotheses at the edge.
+        let (w, h) = (64, 48);
+        let pixels = vec![128.0f32; w * h];
+        let frame = Frame::new(w, h, &pixels).unwrap();
+        let bins = ColourBins::grey(16);
+        let mut window = WorkingWindow::default();
+        window.read(&frame, &bins, [0.0, 0.0, w as f64, h as f64], 1.0);
+        window.integrate(&[0.5; 16]);
+        let ring_mean = |cx: f64| {
+            let e = Ellipse::new(cx, 24.0, 8.0, 8.0, 0.0);
+            let reference = window.area(&e);
+            let ([inner, _], _) = window.ellipse_sums([&window.integral, &window.integral], &e);
+            inner / reference - window.contrast(&e, 1.5, reference)
+        };
+        for cx in [32.0, 4.0] {
+            let mean = ring_mean(cx);
+            assert!((mean - 0.5).abs() < 0.03, "at x = {cx}: {mean}");
+        }
     }
 }
