@@ -3,7 +3,8 @@
 # builds the Rust code in release mode through maturin), then pytest with its summary.
 #
 # The determinism tests compare the binding's boxes with `track run`'s: they use $TRACK_BIN, or
-# the newest target/*/track of the repository (built here when there is none).
+# the newest executable target/*/track of the repository (built here when there is none;
+# `cargo doc` leaves a folder target/doc/track, which does not count).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repo=$(pwd)
@@ -15,7 +16,14 @@ if ! "$python" -m venv "$venv" 2>/dev/null; then
     apt-get update && apt-get install -y --no-install-recommends python3-venv
     "$python" -m venv "$venv"
 fi
-if [ -z "${TRACK_BIN:-}" ] && ! ls target/*/track >/dev/null 2>&1; then
+has_track_bin() {
+    local f
+    for f in target/*/track; do
+        [ -f "$f" ] && [ -x "$f" ] && return 0
+    done
+    return 1
+}
+if [ -z "${TRACK_BIN:-}" ] && ! has_track_bin; then
     cargo build -p track-app --locked
 fi
 export CONTOUR_TRACK_REQUIRE_TRACK_BIN=1

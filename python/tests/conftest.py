@@ -47,11 +47,16 @@ def write_png(path, img):
 
 
 def find_track_bin():
-    """The `track` binary: $TRACK_BIN, else the newest target/*/track of the repository."""
+    """The `track` binary: $TRACK_BIN, else the newest executable target/*/track of the
+    repository (`cargo doc` leaves a folder target/doc/track, which is not one)."""
     env = os.environ.get("TRACK_BIN")
     if env:
         return Path(env)
-    found = sorted(REPO.glob("target/*/track"), key=lambda p: p.stat().st_mtime, reverse=True)
+    found = sorted(
+        (p for p in REPO.glob("target/*/track") if p.is_file() and os.access(p, os.X_OK)),
+        key=lambda p: p.stat().st_mtime,
+        reverse=True,
+    )
     return found[0] if found else None
 
 
