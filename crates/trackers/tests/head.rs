@@ -255,6 +255,39 @@ fn a_tight_annotation_keeps_its_convention() {
     }
 }
 
+#[test]
+fn a_tall_target_keeps_its_aspect() {
+    // A head twice as tall as it is wide, moving. The tracker's ellipses come back from the pose
+    // with a ≥ b and θ = π/2 for such a target; read as (a, b), the appearance would score the
+    // ellipse lying on its side, and the estimate's aspect would settle between the two (about
+    // 1, a round box).
+    let truth_at = |k: usize| Ellipse::new(110.0 + 2.0 * k as f64, 120.0, 15.0, 30.0, 0.0);
+    let truth_aspect = (15.0f64 / 30.0).ln();
+    for seed in 1..=3 {
+        let mut tracker = build(Preset::Head.config(200, seed)).unwrap();
+        let (g, c) = render(Some(truth_at(0)));
+        tracker
+            .init(Frame::with_rgb(W, H, &g, &c).unwrap(), truth_at(0))
+            .unwrap();
+        let mut errors = Vec::new();
+        for k in 1..40 {
+            let (g, c) = render(Some(truth_at(k)));
+            let e = tracker
+                .update(Frame::with_rgb(W, H, &g, &c).unwrap())
+                .unwrap();
+            if k >= 10 {
+                errors.push(((e.bbox.w / e.bbox.h).ln() - truth_aspect).abs());
+            }
+        }
+        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+        assert!(
+            mean < 0.15,
+            "seed {seed}: the reported aspect is off by a factor {:.2} on average",
+            mean.exp()
+        );
+    }
+}
+
 /// The estimates of a 25-frame run of `config` on the moving target, every field.
 fn estimates(config: trackers::TrackerConfig) -> Vec<String> {
     let mut tracker = started(config);

@@ -482,7 +482,8 @@ fn read_window(
     let rect = if whole {
         [0.0, 0.0, fw, fh]
     } else {
-        let (hx, hy) = (s.search * e.a.abs(), s.search * e.b.abs());
+        let (hw, hh) = e.half_extents();
+        let (hx, hy) = (s.search * hw, s.search * hh);
         [e.cx - hx, e.cy - hy, e.cx + hx, e.cy + hy]
     };
     let area = (rect[2].min(fw) - rect[0].max(0.0)) * (rect[3].min(fh) - rect[1].max(0.0));

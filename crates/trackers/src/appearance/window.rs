@@ -153,13 +153,18 @@ impl WorkingWindow {
         ]
     }
 
-    /// A full-resolution ellipse in working coordinates (axis-aligned; θ is ignored).
+    /// A full-resolution ellipse in working coordinates, as the axis-aligned ellipse of the same
+    /// half-extents along x and y ([`Ellipse::half_extents`]). That is the ellipse itself for
+    /// every pose of an axis-aligned tracker, whose ellipses come back from the pose with a ≥ b
+    /// and θ = π/2 when the target is taller than wide: read as (a, b) the window would see
+    /// such a target lying on its side.
     fn to_working(&self, e: &Ellipse) -> (f64, f64, f64, f64) {
+        let (hw, hh) = e.half_extents();
         (
             (e.cx - self.origin[0]) / self.step,
             (e.cy - self.origin[1]) / self.step,
-            e.a.abs() / self.step,
-            e.b.abs() / self.step,
+            hw / self.step,
+            hh / self.step,
         )
     }
 
@@ -354,6 +359,55 @@ impl WorkingWindow {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_tall_pose_is_read_standing_up() {
+        // A dark ellipse 8 px wide and 14 px tall (half-axes) on a bright frame. Its pose in
+        // Odobez's space comes back as an ellipse with a ≥ b and θ = π/2 (a = 14 along y); the
+        // window must read it as the tall region it is, not as an ellipse lying on its side,
+        // which would score the wrong shape as the best and pull every tall target round.
+        let (w, h) = (64, 64);
+        let (cx, cy, hw, hh) = (32.0, 32.0, 8.0, 14.0);
+        let pixels: Vec<f32> = (0..w * h)
+            .map(|k| {
+                let (x, y) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
+                let r2 = ((x - cx) / hw).powi(2) + ((y - cy) / hh).powi(2);
+                if r2 <= 1.0 { 40.0 } else { 200.0 }
+            })
+            .collect();
+        let frame = Frame::new(w, h, &pixels).unwrap();
+        let bins = ColourBins::grey(16);
+        let mut window = WorkingWindow::default();
+        window.read(&frame, &bins, [0.0, 0.0, w as f64, h as f64], 1.0);
+        let dark = bins.of_grey(40.0) as usize;
+        let ratios: Vec<f32> = (0..16)
+            .map(|b| if b == dark { 1.0 } else { -1.0 })
+            .collect();
+        window.integrate(&ratios);
+
+        let space = crate::space::ShapeSpace::Odobez;
+        let standing = Ellipse::new(cx, cy, hw, hh, 0.0);
+        let pose = space
+            .pose(&space.from_ellipse(&standing))
+            .to_ellipse()
+            .unwrap();
+        assert!(pose.a > pose.b && (pose.angle.abs() - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
+        let lying = Ellipse::new(cx, cy, hh, hw, 0.0);
+
+        let contrast = |e: &Ellipse| window.contrast(e, 1.5, window.area(e));
+        assert!((contrast(&pose) - contrast(&standing)).abs() < 1e-9);
+        assert!(
+            contrast(&pose) > contrast(&lying) + 0.5,
+            "{} against {}",
+            contrast(&pose),
+            contrast(&lying)
+        );
+        let grid = motion_est::unit_disc_grid(8);
+        let (mut a, mut b) = (vec![0.0; grid.len()], vec![0.0; grid.len()]);
+        window.patch(&pose, &grid, &mut a).unwrap();
+        window.patch(&standing, &grid, &mut b).unwrap();
+        assert_eq!(a, b);
+    }
 
     #[test]
     fn the_ring_mean_is_taken_over_the_part_of_the_ring_that_was_read() {
