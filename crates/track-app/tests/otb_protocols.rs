@@ -411,6 +411,69 @@ fn track_run_and_eval_otb_score_a_run_alike_and_results_round_trip_boxes_txt() {
 }
 
 #[test]
+fn a_configuration_file_keeps_its_own_particles_and_seed_unless_the_command_line_gives_them() {
+    // A file asking for 37 particles and seed 5: eval otb runs it as track run does, and
+    // --particles / --seed, when given, apply to it as to the presets.
+    let dir = tempfile::tempdir().unwrap();
+    let seq = otb_folder(dir.path(), "walk", 12, true_line);
+    let printed = track(&["config", "m1"]);
+    assert!(printed.status.success(), "{}", common::stderr(&printed));
+    let mut config: serde_json::Value = serde_json::from_slice(&printed.stdout).unwrap();
+    config["particles"] = 37.into();
+    config["seed"] = 5.into();
+    let file = dir.path().join("mine.json");
+    std::fs::write(&file, config.to_string()).unwrap();
+    let boxes = |args: &[&str], out: &Path, path: &Path| {
+        let o = track(&[args, &["--out", s(out), "--quiet"]].concat());
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        std::fs::read_to_string(path).unwrap()
+    };
+    let run_out = dir.path().join("run");
+    let run = boxes(
+        &["run", s(&seq), "--config", s(&file)],
+        &run_out,
+        &run_out.join("boxes.txt"),
+    );
+    let eval_out = dir.path().join("eval");
+    let eval = boxes(
+        &["eval", "otb", s(&seq), "--config", s(&file)],
+        &eval_out,
+        &eval_out.join("ope/m1/walk.txt"),
+    );
+    assert_eq!(
+        eval, run,
+        "eval otb did not run the file's own particles and seed"
+    );
+    let given_out = dir.path().join("given");
+    let given = boxes(
+        &[
+            "eval",
+            "otb",
+            s(&seq),
+            "--config",
+            s(&file),
+            "--particles",
+            "200",
+            "--seed",
+            "1",
+        ],
+        &given_out,
+        &given_out.join("ope/m1/walk.txt"),
+    );
+    let preset_out = dir.path().join("preset");
+    let preset = boxes(
+        &["eval", "otb", s(&seq), "--tracker", "m1"],
+        &preset_out,
+        &preset_out.join("ope/m1/walk.txt"),
+    );
+    assert_eq!(
+        given, preset,
+        "--particles and --seed did not apply to the file"
+    );
+    assert_ne!(given, run);
+}
+
+#[test]
 fn missing_or_malformed_results_are_named_with_exit_3() {
     let dir = tempfile::tempdir().unwrap();
     let seq = otb_folder(dir.path(), "walk", 4, true_line);

@@ -7,7 +7,7 @@ use scene_synth::Scenario;
 use trackers::{Preset, SmootherSettings, TrackerConfig};
 use vision_core::BoundingBox;
 
-use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, Overrides, progress, tracker_config};
+use crate::commands::run::{Overrides, progress, tracker_config};
 use crate::evaluation::{
     SyntheticSequence, TABLE1_COLUMNS, TABLE1_TRACKERS, switching_csv, switching_markdown,
     switching_scores, table1, table1_csv, table1_markdown,
@@ -104,7 +104,7 @@ pub struct SwitchingArgs {
     #[arg(long)]
     pub frames: Option<usize>,
     /// Runs per scene and tracker: run k renders the scene with seed 1 + k and tracks it with
-    /// seed SEED + k; the table gives the mean and range.
+    /// its seed (--seed, or the preset's or file's) + k; the table gives the mean and range.
     #[arg(long, default_value_t = 1)]
     pub seeds: usize,
     /// Also smooth each run (forward filtering–backward smoothing of the recorded particles)
@@ -126,8 +126,8 @@ pub struct OtbArgs {
     /// OTB folders.
     #[arg(required = true)]
     pub sequences: Vec<PathBuf>,
-    /// Trackers (default head when neither --config nor --results is given), particles and seed (both also
-    /// override those of a --config file).
+    /// Trackers (default head when neither --config nor --results is given), particles and seed
+    /// (both, when given, also override those of a --config file).
     #[command(flatten)]
     pub run: TrackerRuns,
     /// Edge threshold of the measurement lines, grey levels per pixel (default: the
@@ -162,18 +162,20 @@ pub struct TrackerRuns {
     /// A tracker preset (repeatable; the default depends on the evaluation).
     #[arg(long = "tracker")]
     pub trackers: Vec<String>,
-    /// Particles.
-    #[arg(long, default_value_t = DEFAULT_PARTICLES)]
-    pub particles: usize,
-    /// Tracker seed.
-    #[arg(long, default_value_t = DEFAULT_SEED)]
-    pub seed: u64,
+    /// Particles [default: 200, or a configuration file's own]. Given, it applies to every
+    /// tracker run, presets and --config files alike.
+    #[arg(long)]
+    pub particles: Option<usize>,
+    /// Tracker seed [default: 1, or a configuration file's own]. Given, it applies to every
+    /// tracker run.
+    #[arg(long)]
+    pub seed: Option<u64>,
 }
 
 impl TrackerRuns {
     /// The configurations to run: the `--tracker` presets (`default` when neither a preset nor a
     /// `--config` file is given) and then the `--config` files, each with these particles and
-    /// seed and the edge threshold, when given.
+    /// seed and the edge threshold, when given (otherwise a preset's defaults and a file's own).
     pub(crate) fn configs(
         &self,
         files: &[PathBuf],
@@ -181,8 +183,8 @@ impl TrackerRuns {
         edge_threshold: Option<f32>,
     ) -> Result<Vec<TrackerConfig>> {
         let overrides = || Overrides {
-            particles: Some(self.particles),
-            seed: Some(self.seed),
+            particles: self.particles,
+            seed: self.seed,
             parallel: false,
             edge_threshold,
         };
@@ -309,14 +311,15 @@ fn run_switching(args: &SwitchingArgs) -> Result<()> {
         configs,
         out,
     } = args;
-    positive("--particles", run.particles)?;
+    if let Some(n) = run.particles {
+        positive("--particles", n)?;
+    }
     positive("--seeds", *seeds)?;
     let runs = run.configs(
         configs,
         &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full],
         None,
     )?;
-    let seed = &run.seed;
     let _folder = crate::output::OutputFolder::open(out, &[])?;
     let smoother = SmootherSettings::default();
     let mut rows = Vec::new();
@@ -325,7 +328,7 @@ fn run_switching(args: &SwitchingArgs) -> Result<()> {
             let seq = SyntheticSequence::render(scenario, *frames, 1 + k, &[])?;
             for run in &runs {
                 let config = TrackerConfig {
-                    seed: *seed + k,
+                    seed: run.seed + k,
                     ..run.clone()
                 };
                 let name = run.name.clone();
