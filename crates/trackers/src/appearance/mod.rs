@@ -93,15 +93,25 @@ pub struct AppearanceSettings {
     /// dividing by nearly 0, so that q stays within a few units of [0, 1].
     pub max_background_similarity: f64,
     /// Most centres the detection of [`Appearance::detect`] scores in one frame (default 1024):
-    /// its cost bound while the whole frame is searched.
+    /// its cost bound when the whole frame is searched ([`AppearanceSettings::whole_frame_while_lost`]).
     pub max_detection_centres: usize,
     /// Most working pixels read from one frame (default 40 000): the window's cost bound. The
     /// window around a target of the working radius (`search` = 3 half-axes each way: 96 × 96
     /// working pixels at 16 px) is well under it and is read at one window pixel per pixel of
-    /// the tracker's frame. Only the whole frame, read while the target is lost, and the window
-    /// of a target grown past a mean radius of √(40 000 / 36) ≈ 33 working pixels are read
-    /// coarser, which changes what the detection and the lock chain see.
+    /// the tracker's frame. Only the whole frame (read while the target is lost, when
+    /// [`AppearanceSettings::whole_frame_while_lost`]) and the window of a target grown past a
+    /// mean radius of √(40 000 / 36) ≈ 33 working pixels are read coarser, which changes what
+    /// the detection and the lock chain see.
     pub max_window_pixels: usize,
+    /// Whether the whole frame, instead of the window around the last estimate, is read while
+    /// the lock chain says the target is lost, so that the detection where reacquisition draws
+    /// looks everywhere (default false). Measured on the real development set (docs/RESULTS.md,
+    /// decision log), the whole frame found two sequences' targets again (a fast-moving baby,
+    /// a girl turning round) and lost a third's to distractors elsewhere in the frame, on every
+    /// seed and under TRE and SRE alike: it does not earn its place by the rule that a part
+    /// helps on six of nine sequences, and a search over everything that looks like the target
+    /// is where distractors win on footage it was not tuned on.
+    pub whole_frame_while_lost: bool,
     /// Scale factors of the annotation tried at the first frame for the region the colours
     /// support ([`Appearance::tracked`]; default 0.8 to 1.25, about 5 % apart). Empty: the
     /// annotation is tracked as drawn.
@@ -173,6 +183,7 @@ impl Default for AppearanceSettings {
             max_background_similarity: 0.9,
             max_detection_centres: 1024,
             max_window_pixels: 40_000,
+            whole_frame_while_lost: false,
             calibration_scales: vec![0.8, 0.85, 0.9, 0.95, 1.06, 1.12, 1.18, 1.25],
         }
     }
@@ -321,12 +332,13 @@ impl Appearance {
         scaled(e, 1.0 / self.calibration)
     }
 
-    /// Reads the window around `estimate` (the whole frame while the target is believed lost)
+    /// Reads the window around `estimate` (the whole frame while the target is believed lost,
+    /// when [`AppearanceSettings::whole_frame_while_lost`])
     /// and prepares what the terms read: the log-ratios of the blended models, the reference
     /// area and the reference template.
     pub fn read(&mut self, frame: &Frame<'_>, estimate: &Ellipse) {
         let s = &self.settings;
-        let whole = self.lock.p_lost() > 0.5;
+        let whole = s.whole_frame_while_lost && self.lock.p_lost() > 0.5;
         read_window(s, &mut self.window, frame, &self.bins, estimate, whole);
         let mut target = self.initial_target.clone();
         target.blend(&self.target, s.learnt_share);
@@ -555,9 +567,14 @@ mod tests {
     const SKIN: [f64; 3] = [210.0, 150.0, 120.0];
     const WALL: [f64; 3] = [60.0, 90.0, 160.0];
 
-    fn start(settings: AppearanceSettings, (grey, rgb): &(Vec<f32>, Vec<u8>)) -> Appearance {
-        let frame = Frame::with_rgb(96, 72, grey, rgb).unwrap();
-        Appearance::start(settings, &frame, &Ellipse::new(40.0, 36.0, 14.0, 14.0, 0.0)).unwrap()
+    /// The frame of `pixels` (from [`frame`]).
+    fn view((grey, rgb): &(Vec<f32>, Vec<u8>)) -> Frame<'_> {
+        Frame::with_rgb(96, 72, grey, rgb).unwrap()
+    }
+
+    fn start(settings: AppearanceSettings, pixels: &(Vec<f32>, Vec<u8>)) -> Appearance {
+        let e = Ellipse::new(40.0, 36.0, 14.0, 14.0, 0.0);
+        Appearance::start(settings, &view(pixels), &e).unwrap()
     }
 
     #[test]
@@ -599,8 +616,7 @@ mod tests {
     #[test]
     fn the_lock_chain_reads_its_spread_and_centres_from_the_settings() {
         let pixels = frame(SKIN, WALL);
-        let (grey, rgb) = &pixels;
-        let f = Frame::with_rgb(96, 72, grey, rgb).unwrap();
+        let f = view(&pixels);
         // One frame whose estimate lies on the wall.
         let p_lost = |s: AppearanceSettings| {
             let mut a = start(s, &pixels);
@@ -644,8 +660,7 @@ mod tests {
     #[test]
     fn the_window_s_pixel_bound_is_read_from_the_settings() {
         let pixels = frame(SKIN, WALL);
-        let (grey, rgb) = &pixels;
-        let f = Frame::with_rgb(96, 72, grey, rgb).unwrap();
+        let f = view(&pixels);
         let e = Ellipse::new(40.0, 36.0, 14.0, 14.0, 0.0);
         let area = |s: &AppearanceSettings| {
             let a = start(s.clone(), &pixels);
@@ -670,7 +685,11 @@ mod tests {
         // with its centre 12 px from the left border: the detection's ellipse and its contrast
         // ring must lie inside the frame (scored on pixels that were read), next to the border,
         // on the target's row.
-        let a0 = start(AppearanceSettings::default(), &frame(SKIN, WALL));
+        let whole = AppearanceSettings {
+            whole_frame_while_lost: true,
+            ..AppearanceSettings::default()
+        };
+        let a0 = start(whole, &frame(SKIN, WALL));
         let (mut grey, mut rgb) = (Vec::new(), Vec::new());
         for i in 0..96 * 72 {
             let (x, y) = ((i % 96) as f64, (i / 96) as f64);
@@ -702,6 +721,31 @@ mod tests {
     }
 
     #[test]
+    fn while_lost_the_window_stays_around_the_estimate_unless_the_whole_frame_is_asked_for() {
+        let pixels = frame(SKIN, WALL);
+        let f = view(&pixels);
+        // An estimate on the wall, small enough that its window is a part of the frame.
+        let e = Ellipse::new(60.0, 36.0, 6.0, 6.0, 0.0);
+        for whole in [false, true] {
+            let settings = AppearanceSettings {
+                whole_frame_while_lost: whole,
+                ..AppearanceSettings::default()
+            };
+            let mut a = start(settings, &pixels);
+            a.read(&f, &e);
+            a.observe(&e).unwrap();
+            assert!(a.lock.p_lost() > 0.5);
+            a.read(&f, &e);
+            let expected = if whole {
+                [0.0, 0.0, 96.0, 72.0]
+            } else {
+                [42.0, 18.0, 78.0, 54.0]
+            };
+            assert_eq!(a.window.bounds(), expected, "whole frame: {whole}");
+        }
+    }
+
+    #[test]
     fn a_file_without_the_new_fields_loads_today_s_values() {
         // The appearance section of a file written before the constants became settings.
         let old: AppearanceSettings = toml::from_str(
@@ -718,6 +762,7 @@ mod tests {
         assert_eq!((old.lock_spread, old.lock_centres), (0.3, [1.0, 0.0]));
         assert_eq!(old.max_background_similarity, 0.9);
         assert_eq!(old.max_window_pixels, 40_000);
+        assert!(!old.whole_frame_while_lost);
         // A histogram table may give only what it changes.
         let one: AppearanceSettings = toml::from_str("[histogram]\nmax_log_ratio = 5.0\n").unwrap();
         assert_eq!(
