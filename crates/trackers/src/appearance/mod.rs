@@ -387,14 +387,16 @@ impl Appearance {
     }
 
     /// The centre of the best appearance score (colour contrast and template, with their
-    /// weights) of an ellipse of half-axes `axes` over a grid of centres whose ellipse and
+    /// weights) of an ellipse of the shape of `estimate` (its half-extents along x and y, as the
+    /// window reads every ellipse) over a grid of centres whose ellipse and
     /// contrast ring ([`AppearanceSettings::contrast_ring`]) lie inside the window last read
     /// (its middle when the window is narrower), spaced a quarter of the target's
     /// geometric-mean half-axis apart (coarser when that would exceed
     /// [`AppearanceSettings::max_detection_centres`]); `None` for an empty grid. Where the
     /// reacquisition component draws while the target is not held.
-    pub fn detect(&self, axes: (f64, f64)) -> Option<[f64; 2]> {
+    pub fn detect(&self, estimate: &Ellipse) -> Option<[f64; 2]> {
         let s = &self.settings;
+        let axes = estimate.half_extents();
         let [w0, v0, w1, v1] = self.window.bounds();
         // Centres whose ellipse and contrast ring lie inside the window: the detection compares
         // hypotheses with one another, so it scores only those whose whole support was read,
@@ -709,7 +711,7 @@ mod tests {
         a.read(&f, &e);
         let [x0, y0, x1, y1] = a.window.bounds();
         assert_eq!([x0, y0, x1, y1], [0.0, 0.0, 96.0, 72.0]);
-        let [cx, cy] = a.detect((14.0, 14.0)).unwrap();
+        let [cx, cy] = a.detect(&Ellipse::new(0.0, 0.0, 14.0, 14.0, 0.0)).unwrap();
         let reach = 14.0 * a.settings.contrast_ring;
         assert!(cx - reach >= x0 && cx + reach <= x1, "{cx}");
         assert!(cy - reach >= y0 && cy + reach <= y1, "{cy}");

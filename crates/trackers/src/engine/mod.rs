@@ -338,7 +338,7 @@ impl Tracker for ParticleTracker {
                 appearance.read(&frame, &e);
                 let unlocked = self.frame > self.memory.last_locked();
                 if unlocked && self.config.reacquisition.is_some() {
-                    self.detection = appearance.detect(e.half_extents());
+                    self.detection = appearance.detect(&e);
                 }
             }
         }
