@@ -79,6 +79,19 @@ impl Workspace {
         region: &Region<'_>,
         b: PixelBox,
     ) -> usize {
+        self.collect_rows(level, l, region, b, 1)
+    }
+
+    /// [`collect`](Self::collect) on every `row_stride`-th row of the region's box only (from
+    /// its first row), whole rows of the region each.
+    pub(super) fn collect_rows(
+        &mut self,
+        level: &Level,
+        l: usize,
+        region: &Region<'_>,
+        b: PixelBox,
+        row_stride: usize,
+    ) -> usize {
         self.idx.clear();
         self.m.clear();
         self.spans.clear();
@@ -93,7 +106,7 @@ impl Workspace {
         let test = RowTest::new(region);
         // Every pixel of a rectangle's (or the frame's) box is inside with weight 1: whole rows.
         let dense = matches!(region, Region::Full | Region::Rect { .. });
-        for j in j_lo..=j_hi {
+        for j in (j_lo..=j_hi).step_by(row_stride.max(1)) {
             let (a, z) = test.row(j, s, i_lo, i_hi);
             if dense && a <= z {
                 let base = (j - level.y0) * level.width - level.x0;

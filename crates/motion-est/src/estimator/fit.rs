@@ -21,11 +21,11 @@ const REUSE_STEP: f64 = 0.01;
 const LINEAR_STEP: f64 = 0.1;
 
 /// The checked inputs of one fit and the levels it uses.
-struct Plan {
+pub(super) struct Plan {
     /// The origin of the model's coordinates, image pixels.
     origin: [f64; 2],
     /// The region's pixel box.
-    bbox: PixelBox,
+    pub(super) bbox: PixelBox,
     /// Levels present in both pyramids and allowed by the settings.
     top: usize,
     /// The coarsest level used.
@@ -63,7 +63,12 @@ impl MotionEstimator {
 
     /// Checks the request against the pyramids and the settings, and picks the coarsest level
     /// at which the region still has enough pixels (its pixel list is kept in `ws`).
-    fn plan(&self, frames: Frames<'_>, request: &Request<'_>, ws: &mut Workspace) -> Result<Plan> {
+    pub(super) fn plan(
+        &self,
+        frames: Frames<'_>,
+        request: &Request<'_>,
+        ws: &mut Workspace,
+    ) -> Result<Plan> {
         let st = &self.settings;
         let (pyramid0, pyramid1) = (frames.p0, frames.p1);
         let (region, spec) = (request.region, request.spec);
@@ -300,7 +305,7 @@ impl MotionEstimator {
                 covariance.push(cov.matrix[(i, j)]);
             }
         }
-        let honest = converged && s <= 2.0 * st.max_scale;
+        let honest = converged && self.scale_within_ceiling(s);
         let est = MotionEstimate {
             spec,
             params: d.theta[..n].to_vec(),
@@ -311,9 +316,7 @@ impl MotionEstimator {
             inlier_fraction: cov.inlier_fraction,
             iterations: d.iterations,
             converged,
-            reliable: converged
-                && cov.inlier_fraction >= st.min_inlier_fraction
-                && s <= 2.0 * st.max_scale,
+            reliable: honest && cov.inlier_fraction >= st.min_inlier_fraction,
         };
         Ok((est, honest))
     }

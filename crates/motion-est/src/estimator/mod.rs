@@ -39,6 +39,7 @@ mod iterate;
 mod normal;
 mod request;
 mod restarts;
+mod scale_at;
 mod settings;
 #[cfg(test)]
 mod tests;

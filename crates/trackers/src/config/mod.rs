@@ -66,6 +66,18 @@ pub struct MotionSettings {
     /// mouth, hair) weigh more in the robust fit the finer the resolution.
     #[serde(default = "default_motion_working_radius")]
     pub working_radius: Option<f64>,
+    /// Pixels of the frame's own resolution read to test an estimate made at the working scale
+    /// (default 2048; see `engine::motion`): the estimator's reliability ceiling is in grey
+    /// levels of the frame's noise, which shrinking averages away, so a motion found on the
+    /// shrunk frames is accepted only if its residual scale on the frame's pixels stays under
+    /// the ceiling, as an estimate made there would have to. The scale of n residuals has a
+    /// relative spread of about 1/√(2n), 1.6 % for 2048; more only costs time.
+    #[serde(default = "default_frame_check_pixels")]
+    pub frame_check_pixels: usize,
+}
+
+fn default_frame_check_pixels() -> usize {
+    2048
 }
 
 /// The default of [`MotionSettings::working_radius`], the same as `head`'s whole-tracker
@@ -88,6 +100,7 @@ impl Default for MotionSettings {
             occlusion_aware: false,
             warm_start: true,
             working_radius: default_motion_working_radius(),
+            frame_check_pixels: default_frame_check_pixels(),
         }
     }
 }

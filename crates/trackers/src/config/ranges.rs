@@ -128,6 +128,7 @@ pub const SETTING_RANGES: &[SettingRange] = &[
     },
     // motion
     optional(closed("motion.working_radius", 4.0, 1000.0)),
+    closed("motion.frame_check_pixels", 16.0, 16_777_216.0),
     closed("motion.estimator.levels", 1.0, 16.0),
     closed("motion.estimator.margin", 0.0, 4096.0),
     closed("motion.estimator.min_level_pixels", 16.0, 16_777_216.0),

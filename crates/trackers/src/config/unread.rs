@@ -54,6 +54,7 @@ impl TrackerConfig {
                 cluster_iterations,
                 occlusion_aware,
                 working_radius,
+                frame_check_pixels,
             } = &self.motion;
             let d = MotionSettings::default();
             let changed = [
@@ -74,6 +75,10 @@ impl TrackerConfig {
                     *occlusion_aware != d.occlusion_aware,
                 ),
                 ("motion.working_radius", *working_radius != d.working_radius),
+                (
+                    "motion.frame_check_pixels",
+                    *frame_check_pixels != d.frame_check_pixels,
+                ),
             ];
             if let Some((name, _)) = changed.into_iter().find(|(_, c)| *c) {
                 return Err(unread(name, NO_MOTION));

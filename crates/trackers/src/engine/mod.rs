@@ -49,6 +49,7 @@ use crate::space::{STATE_SLOTS, ShapeBounds, StateVector};
 use crate::{Error, Result};
 use estimate::PosteriorSummary;
 use motion::MotionFrames;
+use scale::WorkingScale;
 
 /// The particle-filter tracker behind every preset.
 #[derive(Debug)]
@@ -227,6 +228,15 @@ impl ParticleTracker {
     /// Adds an observation term of the user's after the configured ones.
     pub(crate) fn push_term(&mut self, term: Box<dyn ObservationTerm>) {
         self.likelihood.push(term);
+    }
+
+    /// The frame that the next frame given to this tracker was shrunk from, and the scale
+    /// from this tracker's pixels to its (`ScaledTracker`): motions estimated on this tracker's
+    /// frames are tested on its pixels (see `engine::motion`). Nothing without motion estimates.
+    pub(crate) fn offer_source_frame(&mut self, frame: &Frame<'_>, scale: WorkingScale) {
+        if self.config.needs_motion() {
+            self.motion_frames.offer_source(frame, scale);
+        }
     }
 
     pub(crate) fn frames_done(&self) -> usize {

@@ -4,10 +4,18 @@
 //!
 //! The motion is estimated on frames shrunk so that the target's mean radius is
 //! [`MotionSettings::working_radius`](crate::MotionSettings::working_radius) pixels
-//! ([`MotionFrames`]), and mapped back to the tracker's pixels.
+//! ([`MotionFrames`]), and mapped back to the tracker's pixels. Shrinking averages the frame's
+//! noise away, while the estimator's reliability ceiling is in grey levels of that noise: a
+//! region that holds no single motion (a head turning) fits the shrunk frames within the
+//! ceiling and the frame's pixels beyond it. So each estimate made at the working scale is
+//! tested again on the frame's own pixels
+//! ([`MotionSettings::frame_check_pixels`](crate::MotionSettings::frame_check_pixels) of them)
+//! and, above the ceiling, falls back to the prior as an estimate made there would: the working
+//! scale buys speed without changing which motions are believed.
 
-use motion_est::{MotionEstimator, Pyramid, Region};
-use vision_core::Ellipse;
+use motion_est::{ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Window, Workspace};
+use nalgebra::Matrix6;
+use vision_core::{Ellipse, GreyImage};
 
 use super::ParticleTracker;
 use super::scale::{Shrinker, WorkingScale};
@@ -25,6 +33,21 @@ pub(super) struct MotionFrames {
     shrinker: Shrinker,
     prev: Pyramid,
     now: Pyramid,
+    /// The map from the tracker's pixels to the source frame's: the identity, or the
+    /// `ScaledTracker`'s working scale when the tracker itself runs on shrunk frames.
+    source_scale: WorkingScale,
+    /// The source frame's grey levels offered for the next frame (see [`Self::offer_source`]),
+    /// and whether they are there.
+    staged: Vec<f32>,
+    has_staged: bool,
+    /// When any scale is not the identity, the previous and the current frame's grey levels at
+    /// the source's own resolution (`size`), and level 0 of both over the window the estimates
+    /// are tested on.
+    prev_grey: Vec<f32>,
+    now_grey: Vec<f32>,
+    size: (usize, usize),
+    prev_frame: Pyramid,
+    now_frame: Pyramid,
 }
 
 impl Default for MotionFrames {
@@ -34,9 +57,52 @@ impl Default for MotionFrames {
             shrinker: Shrinker::default(),
             prev: Pyramid::new(),
             now: Pyramid::new(),
+            source_scale: WorkingScale::IDENTITY,
+            staged: Vec::new(),
+            has_staged: false,
+            prev_grey: Vec::new(),
+            now_grey: Vec::new(),
+            size: (0, 0),
+            prev_frame: Pyramid::new(),
+            now_frame: Pyramid::new(),
         }
     }
 }
+
+/// A cluster's motion estimated at the working scale, in frame pixels, before its test on the
+/// frame's own pixels.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    /// The cluster's region, frame pixels; the motion is about its centre.
+    region: Ellipse,
+    affine: [f64; 6],
+    covariance: Matrix6<f64>,
+    /// The intensity offset, when estimated.
+    offset: Option<f64>,
+    converged: bool,
+}
+
+impl Candidate {
+    /// The pixel box (min x, min y, max x, max y) that the region covers in the previous frame
+    /// and, moved by the motion, in the current one.
+    fn reach(&self) -> [f64; 4] {
+        let e = &self.region;
+        let (hw, hh) = e.half_extents();
+        let a = &self.affine;
+        let mut b = [e.cx - hw, e.cy - hh, e.cx + hw, e.cy + hh];
+        for (dx, dy) in [(-hw, -hh), (hw, -hh), (-hw, hh), (hw, hh)] {
+            let x = e.cx + dx + a[0] + a[1] * dx + a[2] * dy;
+            let y = e.cy + dy + a[3] + a[4] * dx + a[5] * dy;
+            b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
+        }
+        b
+    }
+}
+
+/// Pixels around the tested regions' reach that level 0 is built over: the smoothing's and the
+/// bicubic interpolation's half-widths (2 px each), so that no pixel read sees a clamped border
+/// the full frame would not have.
+const TEST_WINDOW_MARGIN: f64 = 4.0;
 
 impl MotionFrames {
     /// Sets the working scale for `target` (`None`: the frame's own pixels) and builds the
@@ -53,18 +119,137 @@ impl MotionFrames {
         self.build(estimator, frame)
     }
 
+    /// The frame the tracker's next frame was shrunk from (`ScaledTracker`), `scale` mapping the
+    /// tracker's pixels to its: the estimates are then tested on its pixels. Without an offer,
+    /// the tracker's own frame is the source.
+    pub(super) fn offer_source(&mut self, frame: &Frame<'_>, scale: WorkingScale) {
+        self.staged.clear();
+        self.staged.extend_from_slice(frame.data());
+        self.has_staged = true;
+        self.source_scale = scale;
+        self.size = (frame.width(), frame.height());
+    }
+
+    /// Whether estimates are made at the source's own resolution (nothing to test).
+    fn at_source_resolution(&self) -> bool {
+        self.scale.is_identity() && self.source_scale.is_identity()
+    }
+
     /// The next frame: the current pyramid becomes the previous one.
     pub(super) fn advance(&mut self, estimator: &MotionEstimator, frame: &Frame<'_>) -> Result<()> {
         std::mem::swap(&mut self.prev, &mut self.now);
+        std::mem::swap(&mut self.prev_grey, &mut self.now_grey);
         self.build(estimator, frame)
     }
 
     fn build(&mut self, estimator: &MotionEstimator, frame: &Frame<'_>) -> Result<()> {
+        if self.has_staged {
+            std::mem::swap(&mut self.now_grey, &mut self.staged);
+            self.has_staged = false;
+        } else {
+            self.source_scale = WorkingScale::IDENTITY;
+            self.size = (frame.width(), frame.height());
+            if !self.scale.is_identity() {
+                self.now_grey.clear();
+                self.now_grey.extend_from_slice(frame.data());
+            }
+        }
         if self.scale.is_identity() {
             estimator.build_pyramid_into(frame.grey(), &mut self.now)?;
         } else {
             let grey = self.shrinker.shrink_grey(frame)?;
             estimator.build_pyramid_into(grey, &mut self.now)?;
+        }
+        Ok(())
+    }
+
+    /// Drops (sets to `None`) every candidate whose residual scale on the frame's own pixels
+    /// (`max_pixels` of its region) exceeds the estimator's reliability ceiling, or cannot be
+    /// measured; nothing at the identity, where the estimator tested its estimates itself.
+    fn test_at_frame_resolution(
+        &mut self,
+        estimator: &MotionEstimator,
+        candidates: &mut [Option<Candidate>],
+        max_pixels: usize,
+        ws: &mut Workspace,
+    ) -> Result<()> {
+        if self.at_source_resolution() {
+            return Ok(());
+        }
+        // The candidates in the source's pixels.
+        let outer = self.source_scale;
+        let source: Vec<Option<Candidate>> = candidates
+            .iter()
+            .map(|c| {
+                c.map(|c| {
+                    let (affine, covariance) = outer.affine_to_frame(c.affine, &c.covariance);
+                    Candidate {
+                        region: outer.to_frame(&c.region),
+                        affine,
+                        covariance,
+                        ..c
+                    }
+                })
+            })
+            .collect();
+        let Some(reach) = source
+            .iter()
+            .flatten()
+            .map(Candidate::reach)
+            .reduce(|a, b| {
+                [
+                    a[0].min(b[0]),
+                    a[1].min(b[1]),
+                    a[2].max(b[2]),
+                    a[3].max(b[3]),
+                ]
+            })
+        else {
+            return Ok(());
+        };
+        let (w, h) = self.size;
+        let clip = |v: f64, n: usize| (v.max(0.0) as usize).min(n - 1);
+        let (x0, y0) = (
+            clip(reach[0] - TEST_WINDOW_MARGIN, w),
+            clip(reach[1] - TEST_WINDOW_MARGIN, h),
+        );
+        let (x1, y1) = (
+            clip((reach[2] + TEST_WINDOW_MARGIN).ceil(), w),
+            clip((reach[3] + TEST_WINDOW_MARGIN).ceil(), h),
+        );
+        let window = Window {
+            x0,
+            y0,
+            width: x1 + 1 - x0,
+            height: y1 + 1 - y0,
+        };
+        // Level 0 only, smoothed as the estimator's own level 0: all the test reads.
+        let presmooth = estimator.settings().presmooth;
+        let prev = GreyImage::new(w, h, &self.prev_grey)?;
+        self.prev_frame
+            .build_into(prev, Some(window), 1, presmooth)?;
+        let now = GreyImage::new(w, h, &self.now_grey)?;
+        self.now_frame.build_into(now, Some(window), 1, presmooth)?;
+        for (slot, c) in candidates.iter_mut().zip(&source) {
+            let Some(c) = c else { continue };
+            let mut params = c.affine.to_vec();
+            params.extend(c.offset);
+            let spec = ModelSpec::new(MotionModel::Affine, c.offset.is_some());
+            let holds = estimator
+                .residual_scale(
+                    &self.prev_frame,
+                    &self.now_frame,
+                    &Region::Ellipse(c.region),
+                    spec,
+                    &params,
+                    [c.region.cx, c.region.cy],
+                    max_pixels,
+                    ws,
+                )
+                .is_ok_and(|s| estimator.scale_within_ceiling(s));
+            if !holds {
+                *slot = None;
+            }
         }
         Ok(())
     }
@@ -95,10 +280,55 @@ impl ParticleTracker {
         }
         let spec =
             motion_est::ModelSpec::new(motion_est::MotionModel::Affine, self.config.motion.offset);
-        self.clusters.clear();
-        let (mut used, mut failures) = (0, 0);
+        // Each cluster's motion at the working scale, in frame pixels.
+        let mut candidates = Vec::with_capacity(k);
         let mut warm: Option<Vec<f64>> = None;
         for (c, mean) in self.clustering.means.iter().enumerate() {
+            let candidate = (self.clustering.sizes[c] > 0)
+                .then(|| space.pose(mean).to_ellipse())
+                .flatten()
+                .and_then(|frame_region| {
+                    let e = scale.to_working(&frame_region);
+                    let est = self
+                        .motion
+                        .estimate_from(
+                            &self.motion_frames.prev,
+                            &self.motion_frames.now,
+                            &Region::Ellipse(e),
+                            spec,
+                            Some([e.cx, e.cy]),
+                            warm.as_deref(),
+                            &mut self.motion_workspace,
+                        )
+                        // An estimate that could not separate the dominant motion from the rest
+                        // is an error (`motion_est::Error::Unreliable`), as is any other failure:
+                        // the cluster falls back to the prior prediction.
+                        .ok()?;
+                    // A start for the next cluster's estimate, whatever its test below.
+                    if self.config.motion.warm_start && est.converged {
+                        warm = Some(est.params.clone());
+                    }
+                    let (affine, covariance) =
+                        scale.affine_to_frame(est.affine(), &est.affine_covariance());
+                    Some(Candidate {
+                        region: frame_region,
+                        affine,
+                        covariance,
+                        offset: spec.offset.then(|| est.params[6]),
+                        converged: est.converged,
+                    })
+                });
+            candidates.push(candidate);
+        }
+        self.motion_frames.test_at_frame_resolution(
+            &self.motion,
+            &mut candidates,
+            self.config.motion.frame_check_pixels,
+            &mut self.motion_workspace,
+        )?;
+        self.clusters.clear();
+        let (mut used, mut failures) = (0, 0);
+        for (c, (mean, candidate)) in self.clustering.means.iter().zip(candidates).enumerate() {
             if self.clustering.sizes[c] == 0 {
                 // No particle will read this entry; it only keeps the indices aligned.
                 self.clusters
@@ -108,33 +338,10 @@ impl ParticleTracker {
             used += 1;
             let size = self.clustering.sizes[c] as f64;
             let mean_prev = prev_means[c].map(|v| v / size);
-            let pose = space.pose(mean);
             let sigmas = self.dynamics.settings.sigmas(space, mean);
-            let motion = pose.to_ellipse().and_then(|e| {
-                let e = scale.to_working(&e);
-                let region = Region::Ellipse(e);
-                let est = self
-                    .motion
-                    .estimate_from(
-                        &self.motion_frames.prev,
-                        &self.motion_frames.now,
-                        &region,
-                        spec,
-                        Some([e.cx, e.cy]),
-                        warm.as_deref(),
-                        &mut self.motion_workspace,
-                    )
-                    // An estimate that could not separate the dominant motion from the rest is an
-                    // error (`motion_est::Error::Unreliable`), as is any other failure: the
-                    // cluster falls back to the prior prediction.
-                    .ok()?;
-                if self.config.motion.warm_start && est.converged {
-                    warm = Some(est.params.clone());
-                }
-                let (affine, affine_cov) =
-                    scale.affine_to_frame(est.affine(), &est.affine_covariance());
-                let (d, cov) = state_increment(space, mean, &affine, &affine_cov).ok()?;
-                ClusterMotion::new(space, d, &cov, &sigmas, est.converged)
+            let motion = candidate.and_then(|m| {
+                let (d, cov) = state_increment(space, mean, &m.affine, &m.covariance).ok()?;
+                ClusterMotion::new(space, d, &cov, &sigmas, m.converged)
             });
             let motion = motion.unwrap_or_else(|| {
                 failures += 1;
@@ -152,6 +359,38 @@ mod tests {
     use super::*;
     use motion_est::{ModelSpec, MotionModel, Settings, Workspace};
 
+    /// The frames' size, and the target in them: a face of about 65 px in radius, shrunk by
+    /// about 4 at a 16 px working radius.
+    const W: usize = 320;
+    const H: usize = 240;
+    fn face() -> Ellipse {
+        Ellipse {
+            cx: 160.0,
+            cy: 120.0,
+            a: 60.0,
+            b: 70.0,
+            angle: 0.0,
+        }
+    }
+
+    /// The affine motion of `region` (in `frames`' pixels, about its centre) from the previous
+    /// to the current frame of `frames`, estimated cold.
+    fn estimate_in(
+        frames: &MotionFrames,
+        estimator: &MotionEstimator,
+        region: &Ellipse,
+        ws: &mut Workspace,
+    ) -> motion_est::Result<motion_est::MotionEstimate> {
+        estimator.estimate(
+            &frames.prev,
+            &frames.now,
+            &Region::Ellipse(*region),
+            ModelSpec::new(MotionModel::Affine, false),
+            Some([region.cx, region.cy]),
+            ws,
+        )
+    }
+
     /// A smooth texture of several wavelengths, at (x, y) in frame pixels.
     fn texture(x: f64, y: f64) -> f32 {
         (100.0
@@ -165,14 +404,8 @@ mod tests {
         // Frame 1 is frame 0 moved by a known affine displacement about the target's centre; the
         // motion estimated on both frames shrunk to a 16 px working radius must come back, in
         // frame pixels, as that displacement.
-        let (w, h) = (320usize, 240usize);
-        let target = Ellipse {
-            cx: 160.0,
-            cy: 120.0,
-            a: 60.0,
-            b: 70.0,
-            angle: 0.0,
-        };
+        let (w, h) = (W, H);
+        let target = face();
         let truth = [5.0, 0.02, -0.01, -3.0, 0.015, 0.01];
         let frame0: Vec<f32> = (0..w * h)
             .map(|k| texture((k % w) as f64, (k / w) as f64))
@@ -201,17 +434,7 @@ mod tests {
         let scale = frames.scale;
         assert!(scale.factor() > 4.0);
         let e = scale.to_working(&target);
-        let est = estimator
-            .estimate_from(
-                &frames.prev,
-                &frames.now,
-                &Region::Ellipse(e),
-                ModelSpec::new(MotionModel::Affine, false),
-                Some([e.cx, e.cy]),
-                None,
-                &mut Workspace::new(),
-            )
-            .unwrap();
+        let est = estimate_in(&frames, &estimator, &e, &mut Workspace::new()).unwrap();
         let (affine, cov) = scale.affine_to_frame(est.affine(), &est.affine_covariance());
         for (i, (got, want)) in affine.iter().zip(truth).enumerate() {
             let tolerance = if i % 3 == 0 { 0.05 } else { 0.002 };
@@ -226,5 +449,115 @@ mod tests {
         let f2 = scale.factor().powi(2);
         assert!((cov[(0, 0)] - f2 * working[(0, 0)]).abs() <= 1e-12 * cov[(0, 0)].abs());
         assert_eq!(cov[(1, 1)], working[(1, 1)]);
+    }
+
+    /// Frame 0: the texture plus white noise of `sigma`; frame 1: frame 0's texture moved by
+    /// (3, −2) px, its own noise.
+    fn noisy_pair(w: usize, h: usize, sigma: f64, seed: u64) -> (Vec<f32>, Vec<f32>) {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let noise = Normal::new(0.0, sigma).unwrap();
+        let mut draw = |x: f64, y: f64| (f64::from(texture(x, y)) + noise.sample(&mut rng)) as f32;
+        let mut f0 = Vec::with_capacity(w * h);
+        let mut f1 = Vec::with_capacity(w * h);
+        for k in 0..w * h {
+            let (x, y) = ((k % w) as f64, (k / w) as f64);
+            f0.push(draw(x, y));
+            f1.push(draw(x - 3.0, y + 2.0));
+        }
+        (f0, f1)
+    }
+
+    #[test]
+    fn a_motion_the_frames_own_pixels_reject_falls_back_as_at_full_resolution() {
+        // Noise that the estimator's ceiling rejects at the frame's resolution is averaged away
+        // on the shrunk frames, where the same motion fits within it. The test on the frame's
+        // pixels must give the full-resolution verdict: reject under strong noise, keep under
+        // weak noise, over several noise draws, whether the motion's own working scale or the
+        // whole tracker's shrank the frames.
+        let (w, h) = (W, H);
+        let target = face();
+        let estimator = MotionEstimator::new(Settings::tracking()).unwrap();
+        let mut ws = Workspace::new();
+        for seed in 1..=3 {
+            for (sigma, believed) in [(14.0, false), (2.0, true)] {
+                let (g0, g1) = noisy_pair(w, h, sigma, seed);
+                let (f0, f1) = (
+                    Frame::new(w, h, &g0).unwrap(),
+                    Frame::new(w, h, &g1).unwrap(),
+                );
+                // The estimator's own verdict at the frame's resolution.
+                let mut full = MotionFrames::default();
+                full.start(&estimator, &f0, &target, None).unwrap();
+                full.advance(&estimator, &f1).unwrap();
+                let at_full = estimate_in(&full, &estimator, &target, &mut ws);
+                assert_eq!(
+                    at_full.is_ok(),
+                    believed,
+                    "σ {sigma}, seed {seed}: {at_full:?}"
+                );
+                // At the working scale the estimate is reliable either way...
+                let mut frames = MotionFrames::default();
+                frames.start(&estimator, &f0, &target, Some(16.0)).unwrap();
+                frames.advance(&estimator, &f1).unwrap();
+                let scale = frames.scale;
+                let e = scale.to_working(&target);
+                let est = estimate_in(&frames, &estimator, &e, &mut ws)
+                    .unwrap_or_else(|err| panic!("σ {sigma}, seed {seed}: {err}"));
+                let (affine, covariance) =
+                    scale.affine_to_frame(est.affine(), &est.affine_covariance());
+                assert!((affine[0] - 3.0).abs() < 0.3 && (affine[3] + 2.0).abs() < 0.3);
+                // ...and the test on the frame's pixels gives the full-resolution verdict.
+                let mut candidates = [Some(Candidate {
+                    region: target,
+                    affine,
+                    covariance,
+                    offset: None,
+                    converged: est.converged,
+                })];
+                frames
+                    .test_at_frame_resolution(&estimator, &mut candidates, 2048, &mut ws)
+                    .unwrap();
+                assert_eq!(candidates[0].is_some(), believed, "σ {sigma}, seed {seed}");
+                // The same for a tracker that itself runs on the shrunk frames (`ScaledTracker`,
+                // its motion at its own resolution) and is offered the frames they came from.
+                let outer = WorkingScale::for_target(&target, 16.0);
+                let mut shrinker = Shrinker::for_frames(outer, w, h);
+                let s0 = shrinker.shrink_grey(&f0).unwrap().data().to_vec();
+                let s1 = shrinker.shrink_grey(&f1).unwrap().data().to_vec();
+                let (ow, oh) = outer.working_size(w, h);
+                let (w0, w1) = (
+                    Frame::new(ow, oh, &s0).unwrap(),
+                    Frame::new(ow, oh, &s1).unwrap(),
+                );
+                let inner_target = outer.to_working(&target);
+                let mut inner = MotionFrames::default();
+                inner.offer_source(&f0, outer);
+                inner
+                    .start(&estimator, &w0, &inner_target, Some(16.0))
+                    .unwrap();
+                assert!(inner.scale.is_identity());
+                inner.offer_source(&f1, outer);
+                inner.advance(&estimator, &w1).unwrap();
+                let est = estimate_in(&inner, &estimator, &inner_target, &mut ws)
+                    .unwrap_or_else(|err| panic!("σ {sigma}, seed {seed}: {err}"));
+                let mut candidates = [Some(Candidate {
+                    region: inner_target,
+                    affine: est.affine(),
+                    covariance: est.affine_covariance(),
+                    offset: None,
+                    converged: est.converged,
+                })];
+                inner
+                    .test_at_frame_resolution(&estimator, &mut candidates, 2048, &mut ws)
+                    .unwrap();
+                assert_eq!(
+                    candidates[0].is_some(),
+                    believed,
+                    "σ {sigma}, seed {seed}, scaled"
+                );
+            }
+        }
     }
 }

@@ -327,6 +327,7 @@ impl ScaledTracker {
             Some(_) => Frame::with_rgb(ow, oh, pixels, &self.shrinker.rgb)?,
             None => Frame::new(ow, oh, pixels)?,
         };
+        self.inner.offer_source_frame(&frame, self.scale);
         let estimate = step(&mut self.inner, working)?;
         Ok(self
             .scale
