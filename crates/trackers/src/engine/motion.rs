@@ -69,11 +69,11 @@ impl Default for MotionFrames {
     }
 }
 
-/// A cluster's motion estimated at the working scale, in frame pixels, before its test on the
-/// frame's own pixels.
+/// A cluster's motion estimated at the working scale, in the tracker's pixels, before its test
+/// on the source frame's own pixels.
 #[derive(Debug, Clone, Copy)]
 struct Candidate {
-    /// The cluster's region, frame pixels; the motion is about its centre.
+    /// The cluster's region; the motion is about its centre.
     region: Ellipse,
     affine: [f64; 6],
     covariance: Matrix6<f64>,
@@ -163,9 +163,10 @@ impl MotionFrames {
         Ok(())
     }
 
-    /// Drops (sets to `None`) every candidate whose residual scale on the frame's own pixels
-    /// (`max_pixels` of its region) exceeds the estimator's reliability ceiling, or cannot be
-    /// measured; nothing at the identity, where the estimator tested its estimates itself.
+    /// Drops (sets to `None`) every candidate whose residual scale on the source frame's own
+    /// pixels (`max_pixels` of its region) exceeds the estimator's reliability ceiling, or cannot
+    /// be measured; nothing when the estimates were made at the source's resolution, where the
+    /// estimator tested them itself.
     fn test_at_frame_resolution(
         &mut self,
         estimator: &MotionEstimator,
@@ -280,7 +281,7 @@ impl ParticleTracker {
         }
         let spec =
             motion_est::ModelSpec::new(motion_est::MotionModel::Affine, self.config.motion.offset);
-        // Each cluster's motion at the working scale, in frame pixels.
+        // Each cluster's motion at the working scale, in the tracker's pixels.
         let mut candidates = Vec::with_capacity(k);
         let mut warm: Option<Vec<f64>> = None;
         for (c, mean) in self.clustering.means.iter().enumerate() {
