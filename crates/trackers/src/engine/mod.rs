@@ -15,7 +15,8 @@
 //! 5. **estimate**: the weighted mean pose and the hidden processes' estimates ([`estimate`]);
 //! 6. **monitor**: Wu's status with the visibility check, or the appearance's lock chain
 //!    ([`crate::monitor`]), and the memory of the locked estimates ([`lock`]);
-//! 7. **learn**: the appearance models from locked frames.
+//! 7. **learn**: the appearance models from the estimate (held while lost only with
+//!    [`AppearanceSettings::lock_holds_learning`](crate::AppearanceSettings::lock_holds_learning)).
 
 mod estimate;
 mod lock;
