@@ -736,25 +736,38 @@ mod tests {
         );
     }
 
+    /// An estimate on the wall, small enough that its window is a part of the frame.
+    const ON_THE_WALL: Ellipse = Ellipse {
+        cx: 60.0,
+        cy: 36.0,
+        a: 6.0,
+        b: 6.0,
+        angle: 0.0,
+    };
+
+    /// The appearance learnt on the skin, after one estimate on the wall that says "lost".
+    fn lost_on_the_wall(settings: AppearanceSettings, pixels: &(Vec<f32>, Vec<u8>)) -> Appearance {
+        let mut a = start(settings, pixels);
+        a.read(&view(pixels), &ON_THE_WALL);
+        a.observe(&ON_THE_WALL).unwrap();
+        assert!(a.lock.p_lost() > 0.5);
+        a
+    }
+
     #[test]
     fn the_models_learn_while_lost_unless_the_lock_holds_them() {
-        // An estimate on the wall says "lost": the template moves towards the wall's samples,
-        // unless the lock chain holds learning, when it stays the skin's.
+        // The template and the target's colour move towards the wall's, unless the lock chain
+        // holds learning, when they stay the skin's.
         let pixels = frame(SKIN, WALL);
-        let f = view(&pixels);
-        let e = Ellipse::new(60.0, 36.0, 6.0, 6.0, 0.0);
         for hold in [false, true] {
             let settings = AppearanceSettings {
                 lock_holds_learning: hold,
                 ..AppearanceSettings::default()
             };
-            let mut a = start(settings, &pixels);
-            let (template, target) = (a.template.clone(), a.target.clone());
-            a.read(&f, &e);
-            a.observe(&e).unwrap();
-            assert!(a.lock.p_lost() > 0.5);
-            assert_eq!(a.template == template, hold, "hold: {hold}");
-            assert_eq!(a.target == target, hold, "hold: {hold}");
+            let learnt = start(settings.clone(), &pixels);
+            let a = lost_on_the_wall(settings, &pixels);
+            assert_eq!(a.template == learnt.template, hold, "hold: {hold}");
+            assert_eq!(a.target == learnt.target, hold, "hold: {hold}");
         }
     }
 
@@ -762,17 +775,13 @@ mod tests {
     fn while_lost_the_window_stays_around_the_estimate_unless_the_whole_frame_is_asked_for() {
         let pixels = frame(SKIN, WALL);
         let f = view(&pixels);
-        // An estimate on the wall, small enough that its window is a part of the frame.
-        let e = Ellipse::new(60.0, 36.0, 6.0, 6.0, 0.0);
+        let e = ON_THE_WALL;
         for whole in [false, true] {
             let settings = AppearanceSettings {
                 whole_frame_while_lost: whole,
                 ..AppearanceSettings::default()
             };
-            let mut a = start(settings, &pixels);
-            a.read(&f, &e);
-            a.observe(&e).unwrap();
-            assert!(a.lock.p_lost() > 0.5);
+            let mut a = lost_on_the_wall(settings, &pixels);
             a.read(&f, &e);
             let expected = if whole {
                 [0.0, 0.0, 96.0, 72.0]
