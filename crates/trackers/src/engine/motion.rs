@@ -48,6 +48,8 @@ pub(super) struct MotionFrames {
     size: (usize, usize),
     prev_frame: Pyramid,
     now_frame: Pyramid,
+    /// Each cluster's estimate of the frame (a buffer reused from frame to frame).
+    candidates: Vec<Option<Candidate>>,
 }
 
 impl Default for MotionFrames {
@@ -65,6 +67,7 @@ impl Default for MotionFrames {
             size: (0, 0),
             prev_frame: Pyramid::new(),
             now_frame: Pyramid::new(),
+            candidates: Vec::new(),
         }
     }
 }
@@ -83,6 +86,17 @@ struct Candidate {
 }
 
 impl Candidate {
+    /// The candidate in the pixels of the frame that `outer` maps the tracker's pixels to.
+    fn in_source(self, outer: WorkingScale) -> Self {
+        let (affine, covariance) = outer.affine_to_frame(self.affine, &self.covariance);
+        Self {
+            region: outer.to_frame(&self.region),
+            affine,
+            covariance,
+            ..self
+        }
+    }
+
     /// The pixel box (min x, min y, max x, max y) that the region covers in the previous frame
     /// and, moved by the motion, in the current one.
     fn reach(&self) -> [f64; 4] {
@@ -102,7 +116,7 @@ impl Candidate {
 /// Pixels around the tested regions' reach that level 0 is built over: the smoothing's and the
 /// bicubic interpolation's half-widths (2 px each), so that no pixel read sees a clamped border
 /// the full frame would not have.
-const TEST_WINDOW_MARGIN: f64 = 4.0;
+const TEST_WINDOW_MARGIN: usize = 4;
 
 impl MotionFrames {
     /// Sets the working scale for `target` (`None`: the frame's own pixels) and builds the
@@ -177,26 +191,11 @@ impl MotionFrames {
         if self.at_source_resolution() {
             return Ok(());
         }
-        // The candidates in the source's pixels.
         let outer = self.source_scale;
-        let source: Vec<Option<Candidate>> = candidates
-            .iter()
-            .map(|c| {
-                c.map(|c| {
-                    let (affine, covariance) = outer.affine_to_frame(c.affine, &c.covariance);
-                    Candidate {
-                        region: outer.to_frame(&c.region),
-                        affine,
-                        covariance,
-                        ..c
-                    }
-                })
-            })
-            .collect();
-        let Some(reach) = source
+        let Some(reach) = candidates
             .iter()
             .flatten()
-            .map(Candidate::reach)
+            .map(|c| c.in_source(outer).reach())
             .reduce(|a, b| {
                 [
                     a[0].min(b[0]),
@@ -209,21 +208,16 @@ impl MotionFrames {
             return Ok(());
         };
         let (w, h) = self.size;
-        let clip = |v: f64, n: usize| (v.max(0.0) as usize).min(n - 1);
-        let (x0, y0) = (
-            clip(reach[0] - TEST_WINDOW_MARGIN, w),
-            clip(reach[1] - TEST_WINDOW_MARGIN, h),
+        let pixel = |v: f64, n: usize| (v.max(0.0) as usize).min(n - 1);
+        let window = Window::around(
+            pixel(reach[0].floor(), w),
+            pixel(reach[1].floor(), h),
+            pixel(reach[2].ceil(), w),
+            pixel(reach[3].ceil(), h),
+            TEST_WINDOW_MARGIN,
+            w,
+            h,
         );
-        let (x1, y1) = (
-            clip((reach[2] + TEST_WINDOW_MARGIN).ceil(), w),
-            clip((reach[3] + TEST_WINDOW_MARGIN).ceil(), h),
-        );
-        let window = Window {
-            x0,
-            y0,
-            width: x1 + 1 - x0,
-            height: y1 + 1 - y0,
-        };
         // Level 0 only, smoothed as the estimator's own level 0: all the test reads.
         let presmooth = estimator.settings().presmooth;
         let prev = GreyImage::new(w, h, &self.prev_grey)?;
@@ -231,18 +225,21 @@ impl MotionFrames {
             .build_into(prev, Some(window), 1, presmooth)?;
         let now = GreyImage::new(w, h, &self.now_grey)?;
         self.now_frame.build_into(now, Some(window), 1, presmooth)?;
-        for (slot, c) in candidates.iter_mut().zip(&source) {
-            let Some(c) = c else { continue };
-            let mut params = c.affine.to_vec();
-            params.extend(c.offset);
+        for slot in candidates.iter_mut() {
+            let Some(c) = slot.map(|c| c.in_source(outer)) else {
+                continue;
+            };
             let spec = ModelSpec::new(MotionModel::Affine, c.offset.is_some());
+            let mut params = [0.0; 7];
+            params[..6].copy_from_slice(&c.affine);
+            params[6] = c.offset.unwrap_or(0.0);
             let holds = estimator
                 .residual_scale(
                     &self.prev_frame,
                     &self.now_frame,
                     &Region::Ellipse(c.region),
                     spec,
-                    &params,
+                    &params[..spec.len()],
                     [c.region.cx, c.region.cy],
                     max_pixels,
                     ws,
@@ -282,7 +279,8 @@ impl ParticleTracker {
         let spec =
             motion_est::ModelSpec::new(motion_est::MotionModel::Affine, self.config.motion.offset);
         // Each cluster's motion at the working scale, in the tracker's pixels.
-        let mut candidates = Vec::with_capacity(k);
+        let mut candidates = std::mem::take(&mut self.motion_frames.candidates);
+        candidates.clear();
         let mut warm: Option<Vec<f64>> = None;
         for (c, mean) in self.clustering.means.iter().enumerate() {
             let candidate = (self.clustering.sizes[c] > 0)
@@ -329,7 +327,7 @@ impl ParticleTracker {
         )?;
         self.clusters.clear();
         let (mut used, mut failures) = (0, 0);
-        for (c, (mean, candidate)) in self.clustering.means.iter().zip(candidates).enumerate() {
+        for (c, (mean, candidate)) in self.clustering.means.iter().zip(&candidates).enumerate() {
             if self.clustering.sizes[c] == 0 {
                 // No particle will read this entry; it only keeps the indices aligned.
                 self.clusters
@@ -351,6 +349,7 @@ impl ParticleTracker {
             self.clusters.push(motion);
         }
         self.prev_means = prev_means;
+        self.motion_frames.candidates = candidates;
         Ok((used, failures))
     }
 }
