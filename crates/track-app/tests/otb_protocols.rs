@@ -608,3 +608,123 @@ fn results_do_not_depend_on_the_number_of_threads() {
         }
     }
 }
+
+/// `--frame-step 2` on a sequence scores exactly what every protocol scores on a folder made of
+/// its odd-numbered frames: the same runs, from the same boxes, with the same box files.
+#[test]
+fn a_frame_step_scores_the_sequence_as_a_folder_of_the_frames_it_keeps() {
+    let dir = tempfile::tempdir().unwrap();
+    // Frame 2 is unlabelled, so the kept frames keep a gap; frame 5 is labelled but not kept.
+    let label = |k: usize| match k {
+        2 | 7 => "0,0,0,0".into(),
+        _ => true_line(k),
+    };
+    let full = otb_folder(dir.path(), "walk", 21, label);
+    let kept = dir.path().join("kept").join("walk");
+    std::fs::create_dir_all(kept.join("img")).unwrap();
+    let mut gt = String::new();
+    for (j, k) in (0..21).step_by(2).enumerate() {
+        std::fs::copy(
+            full.join("img").join(format!("{:04}.png", k + 1)),
+            kept.join("img").join(format!("{:04}.png", j + 1)),
+        )
+        .unwrap();
+        gt.push_str(&(label(k) + "\n"));
+    }
+    std::fs::write(kept.join("groundtruth_rect.txt"), gt).unwrap();
+    let eval = |seq: &Path, out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "eval",
+            "otb",
+            s(seq),
+            "--tracker",
+            "m1",
+            "--particles",
+            "50",
+            "--protocol",
+            "ope",
+            "--protocol",
+            "tre",
+            "--protocol",
+            "sre",
+            "--out",
+            s(out),
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        let o = track(&args);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+    };
+    let stepped = dir.path().join("stepped");
+    let reference = dir.path().join("reference");
+    eval(&full, &stepped, &["--frame-step", "2"]);
+    eval(&kept, &reference, &[]);
+    for p in ["ope", "tre", "sre"] {
+        // Every column but frames/s.
+        let rows = |out: &Path| -> Vec<Vec<String>> {
+            csv_rows(out, p)
+                .into_iter()
+                .map(|mut r| {
+                    r.remove(9);
+                    r
+                })
+                .collect()
+        };
+        assert_eq!(rows(&stepped), rows(&reference), "{p}");
+        let runs: usize = row(&csv_rows(&stepped, p), "walk", "m1")[3]
+            .parse()
+            .unwrap();
+        assert!(runs >= 1, "{p}");
+        for k in 0..runs {
+            let name = if p == "ope" {
+                "walk.txt".to_owned()
+            } else {
+                format!("walk.{k}.txt")
+            };
+            let read = |out: &Path| std::fs::read_to_string(out.join(p).join("m1").join(&name));
+            let boxes = read(&stepped).unwrap();
+            assert_eq!(boxes.lines().count(), 11, "{p} {name}");
+            assert_eq!(boxes, read(&reference).unwrap(), "{p} {name}");
+        }
+    }
+    let md = std::fs::read_to_string(stepped.join("tre").join("otb.md")).unwrap();
+    assert!(md.contains("--frame-step 2"), "{md}");
+    // A step that keeps no labelled frame is the ground truth's error (exit 3), a step of 0 a
+    // setting's (exit 2).
+    let odd = otb_folder(dir.path(), "odd", 6, |k| {
+        if k % 2 == 1 {
+            true_line(k)
+        } else {
+            "0,0,0,0".into()
+        }
+    });
+    let out = dir.path().join("odd-out");
+    let with_step = |step: &str| {
+        track(&[
+            "eval",
+            "otb",
+            s(&odd),
+            "--tracker",
+            "m1",
+            "--frame-step",
+            step,
+            "--out",
+            s(&out),
+            "--quiet",
+        ])
+    };
+    let o = with_step("2");
+    assert_eq!(o.status.code(), Some(3));
+    let e = one_error_line(&o);
+    assert!(
+        e.contains("groundtruth_rect.txt") && e.contains("--frame-step 2"),
+        "{e}"
+    );
+    let o = with_step("0");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        common::stderr(&o).contains("--frame-step"),
+        "{}",
+        common::stderr(&o)
+    );
+}

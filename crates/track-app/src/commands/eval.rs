@@ -55,6 +55,8 @@ frame, tracks to the end and is scored on the labelled frames after its start fr
        height (left, right, up, down, the four diagonals), then scaled about its centre by
        0.8, 0.9, 1.1 and 1.2.
 A sequence's figure is the mean over its runs; the set's the mean over sequences.
+With --frame-step K, every K-th frame is kept (and its ground-truth line), from the first: the
+same footage at 1/K of its frame rate, the runs laid out on the frames kept.
 
 Outputs in --out, per protocol P: P/otb.md, P/otb.csv, P/plots/success.svg and precision.svg
 (every tracker over the set) and success_SEQ.svg, precision_SEQ.svg (each sequence), and each
@@ -62,7 +64,8 @@ run's boxes as P/TRACKER/SEQ[.RUN].txt (readable again with --results); index.ht
 
 Examples:
   track eval otb ../shared/data/real/girl_mil --tracker m1 --tracker full
-  track eval otb ../shared/data/real/* --protocol tre --protocol sre --results csrt=peers/";
+  track eval otb ../shared/data/real/* --protocol tre --protocol sre --results csrt=peers/
+  track eval otb ../shared/data/real/* --protocol tre --frame-step 2 --out half-rate/";
 
 /// Arguments of `track eval table1`.
 #[derive(Debug, clap::Args)]
@@ -148,6 +151,13 @@ pub struct OtbArgs {
     /// for every run, as `opencv_peers.py --out DIR` writes them (or this command's own --out).
     #[arg(long = "results", value_name = "NAME=DIR")]
     pub results: Vec<String>,
+    /// Track and score every K-th frame of each sequence, from its first: the footage at 1/K of
+    /// its frame rate, where the target moves K times as far between frames (default 1, every
+    /// frame). The runs of each protocol are laid out on the frames kept, and each box file holds
+    /// one line per frame kept, so --results reads box files written with the same step.
+    #[arg(long, value_name = "K", default_value_t = 1,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub frame_step: u32,
     /// Folder for the tables, plots, boxes and index.html (see below).
     #[arg(long, default_value = "track-eval")]
     pub out: PathBuf,

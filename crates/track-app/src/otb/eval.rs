@@ -30,6 +30,9 @@ const LOST_INDEX: usize = 2;
 struct Prepared {
     dir: PathBuf,
     name: String,
+    /// The sequence's frames, all of them.
+    frames: usize,
+    /// The ground truth of the frames kept (every `--frame-step`-th).
     truth: Vec<Option<BoundingBox>>,
     /// The runs of each protocol asked for, in the order of `protocols`.
     starts: Vec<Vec<RunStart>>,
@@ -83,9 +86,9 @@ fn parse_results(values: &[String]) -> Result<Vec<(String, PathBuf)>> {
         .collect()
 }
 
-/// Reads a sequence's ground truth and frame count, checks its first box against the frame, and
-/// lays out the runs of each protocol.
-fn prepare(dir: &Path, protocols: &[Protocol]) -> Result<Prepared> {
+/// Reads a sequence's ground truth and frame count, checks its first box against the frame, keeps
+/// every `step`-th frame's line from the first, and lays out the runs of each protocol on those.
+fn prepare(dir: &Path, protocols: &[Protocol], step: usize) -> Result<Prepared> {
     let sequence = open_sequence(&dir.to_string_lossy())?;
     let gt_path = sequence.groundtruth.clone().ok_or_else(|| {
         AppError::input(dir, "not an OTB folder: groundtruth_rect.txt is missing")
@@ -93,7 +96,24 @@ fn prepare(dir: &Path, protocols: &[Protocol]) -> Result<Prepared> {
     let info = sequence.source.validate_all()?;
     let truth = load_groundtruth(&gt_path)?;
     check_groundtruth_len(&truth, info.frames, &gt_path)?;
-    first_box_in_frame(&truth, &gt_path, &sequence.name, info.width, info.height)?;
+    // The frames `--frame-step` leaves out count as unlabelled, so that the box checked is the
+    // first one kept, named by its line in the file.
+    let kept: Vec<Option<BoundingBox>> = truth
+        .iter()
+        .enumerate()
+        .map(|(i, b)| b.filter(|_| i % step == 0))
+        .collect();
+    if kept.iter().all(Option::is_none) {
+        return Err(AppError::input(
+            &gt_path,
+            format!(
+                "no labelled box on the frames --frame-step {step} keeps (1, {}, …)",
+                step + 1
+            ),
+        ));
+    }
+    first_box_in_frame(&kept, &gt_path, &sequence.name, info.width, info.height)?;
+    let truth: Vec<Option<BoundingBox>> = kept.into_iter().step_by(step).collect();
     let starts: Vec<Vec<RunStart>> = protocols.iter().map(|&p| run_starts(&truth, p)).collect();
     for (p, runs) in protocols.iter().zip(&starts) {
         let scorable = runs
@@ -114,6 +134,7 @@ fn prepare(dir: &Path, protocols: &[Protocol]) -> Result<Prepared> {
     Ok(Prepared {
         dir: dir.to_path_buf(),
         name: sequence_name(dir),
+        frames: info.frames,
         truth,
         starts,
     })
@@ -170,9 +191,11 @@ pub fn run(args: &OtbArgs) -> Result<()> {
         configs,
         protocols,
         results,
+        frame_step,
         out,
         quiet,
     } = args;
+    let step = *frame_step as usize;
     let results = parse_results(results)?;
     // With --results alone, only those are scored: no tracker runs unless asked for.
     let default: &[Preset] = if results.is_empty() {
@@ -206,7 +229,7 @@ pub fn run(args: &OtbArgs) -> Result<()> {
     let _folder = OutputFolder::open(out, &inputs)?;
     let prepared: Vec<Prepared> = sequences
         .iter()
-        .map(|d| prepare(d, &protocols))
+        .map(|d| prepare(d, &protocols, step))
         .collect::<Result<_>>()?;
     for (i, p) in prepared.iter().enumerate() {
         if prepared[..i].iter().any(|q| q.name == p.name) {
@@ -251,17 +274,18 @@ pub fn run(args: &OtbArgs) -> Result<()> {
     for (si, seq) in prepared.iter().enumerate() {
         bar.set_message(format!("OTB ({})", seq.name));
         let mut source = open_sequence(&seq.dir.to_string_lossy())?.source;
-        let frames = read_all(&mut source)?;
-        if frames.len() != seq.truth.len() {
+        let frames: Vec<Frame> = read_all(&mut source)?;
+        if frames.len() != seq.frames {
             return Err(AppError::input(
                 &seq.dir,
                 format!(
                     "{} frames read, {} expected: the folder changed during the evaluation",
                     frames.len(),
-                    seq.truth.len()
+                    seq.frames
                 ),
             ));
         }
+        let frames: Vec<Frame> = frames.into_iter().step_by(step).collect();
         let jobs: Vec<(usize, usize, usize)> = (0..protocols.len())
             .flat_map(|pi| {
                 (0..configs.len())
@@ -326,7 +350,13 @@ pub fn run(args: &OtbArgs) -> Result<()> {
     let mut printed = String::new();
     for (protocol, rows, _, charts) in &sections {
         let dir = out.join(protocol.name());
-        let md = markdown(*protocol, rows);
+        let mut md = markdown(*protocol, rows);
+        if step > 1 {
+            md = format!(
+                "One frame in {step} of each sequence, from its first (`--frame-step {step}`): \
+                 the footage at 1/{step} of its frame rate.\n\n{md}"
+            );
+        }
         write_atomic(&dir.join("otb.md"), md.as_bytes())?;
         write_atomic(&dir.join("otb.csv"), csv(*protocol, rows).as_bytes())?;
         for c in charts {
