@@ -20,12 +20,23 @@ const REUSE_STEP: f64 = 0.01;
 /// them again; larger last steps (and unconverged estimates) are evaluated afresh.
 const LINEAR_STEP: f64 = 0.1;
 
+/// The checked inputs of one request: the origin, the region's pixel box and the levels present
+/// in both pyramids and allowed by the settings.
+pub(super) struct Checked {
+    /// The origin of the model's coordinates, image pixels.
+    pub(super) origin: [f64; 2],
+    /// The region's pixel box.
+    pub(super) bbox: PixelBox,
+    /// Levels present in both pyramids and allowed by the settings.
+    pub(super) top: usize,
+}
+
 /// The checked inputs of one fit and the levels it uses.
-pub(super) struct Plan {
+struct Plan {
     /// The origin of the model's coordinates, image pixels.
     origin: [f64; 2],
     /// The region's pixel box.
-    pub(super) bbox: PixelBox,
+    bbox: PixelBox,
     /// Levels present in both pyramids and allowed by the settings.
     top: usize,
     /// The coarsest level used.
@@ -63,12 +74,37 @@ impl MotionEstimator {
 
     /// Checks the request against the pyramids and the settings, and picks the coarsest level
     /// at which the region still has enough pixels (its pixel list is kept in `ws`).
-    pub(super) fn plan(
-        &self,
-        frames: Frames<'_>,
-        request: &Request<'_>,
-        ws: &mut Workspace,
-    ) -> Result<Plan> {
+    fn plan(&self, frames: Frames<'_>, request: &Request<'_>, ws: &mut Workspace) -> Result<Plan> {
+        let st = &self.settings;
+        let Checked { origin, bbox, top } = self.check(frames, request)?;
+        let usable = if request.initial.is_some() {
+            top.min(st.warm_levels)
+        } else {
+            top
+        };
+        // The coarsest level at which the region still has enough pixels; its pixel list is kept.
+        let mut plan = Plan {
+            origin,
+            bbox,
+            top,
+            start: 0,
+            collected: false,
+        };
+        for l in (1..usable).rev() {
+            if let Some(level) = frames.p0.level(l)
+                && ws.collect(level, l, request.region, bbox) >= st.min_level_pixels
+            {
+                plan.start = l;
+                plan.collected = true;
+                break;
+            }
+        }
+        Ok(plan)
+    }
+
+    /// Checks the request against the pyramids and the settings: the initial parameters, the
+    /// pyramids' sizes and smoothing, the region and the origin.
+    pub(super) fn check(&self, frames: Frames<'_>, request: &Request<'_>) -> Result<Checked> {
         let st = &self.settings;
         let (pyramid0, pyramid1) = (frames.p0, frames.p1);
         let (region, spec) = (request.region, request.spec);
@@ -116,29 +152,7 @@ impl MotionEstimator {
             needed: spec.len() + 1,
         })?;
         let top = st.levels.min(pyramid0.levels()).min(pyramid1.levels());
-        let usable = if request.initial.is_some() {
-            top.min(st.warm_levels)
-        } else {
-            top
-        };
-        // The coarsest level at which the region still has enough pixels; its pixel list is kept.
-        let mut plan = Plan {
-            origin,
-            bbox,
-            top,
-            start: 0,
-            collected: false,
-        };
-        for l in (1..usable).rev() {
-            if let Some(level) = pyramid0.level(l)
-                && ws.collect(level, l, region, bbox) >= st.min_level_pixels
-            {
-                plan.start = l;
-                plan.collected = true;
-                break;
-            }
-        }
-        Ok(plan)
+        Ok(Checked { origin, bbox, top })
     }
 
     /// The Gauss–Newton iterations of every level from `plan.start` down to full resolution,

@@ -52,13 +52,12 @@ impl MotionEstimator {
             ..Request::new(region, spec)
         };
         // The checks of a warm-started fit (sizes, smoothing, region, origin, parameters).
-        let plan = self.plan(frames, &request, ws)?;
+        let b = self.check(frames, &request)?.bbox;
         let (Some(l0), Some(l1)) = (pyramid0.level(0), pyramid1.level(0)) else {
             return Err(Error::PyramidMismatch {
                 reason: "level 0 missing".into(),
             });
         };
-        let b = plan.bbox;
         let rows = b.j1 + 1 - b.j0;
         let box_pixels = (b.i1 + 1 - b.i0) * rows;
         let stride = box_pixels.div_ceil(max_pixels).clamp(1, rows);
