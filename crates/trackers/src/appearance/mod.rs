@@ -450,6 +450,12 @@ impl Appearance {
         best.map(|(c, _)| c)
     }
 
+    /// The area of the window last read, in the tracker's pixels.
+    pub fn window_area(&self) -> f64 {
+        let [x0, y0, x1, y1] = self.window.bounds();
+        (x1 - x0) * (y1 - y0)
+    }
+
     /// After the estimate `e` of this frame: the lock chain reads its colour similarity to the
     /// first frame's target, and while the target is held the models learn from it.
     ///

@@ -14,15 +14,18 @@
 //!   and `filter.min_ess_fraction` are;
 //! - `estimator` without clutter switching (there is no clutter class β̂ to condition on);
 //! - `dynamics.locked_gamma_rate` without the status HMM, `dynamics.hidden_exploration` without
-//!   a hidden chain (clutter switching or the status HMM).
+//!   a hidden chain (clutter switching or the status HMM);
+//! - `reacquisition.detection_share` without `appearance` (there is no detection to jump to).
 //!
 //! The fields are destructured exhaustively, so a field added to [`TrackerConfig`],
-//! [`LikelihoodSettings`] or [`DynamicsSettings`] does not compile until it is printed here.
+//! [`LikelihoodSettings`], [`DynamicsSettings`] or [`ReacquisitionSettings`] does not compile
+//! until it is printed here.
 
 use serde::ser::{Serialize, SerializeStruct, Serializer};
 
 use super::{ClutterMode, MotionSettings, OcclusionMode, PoseEstimator, TrackerConfig};
 use crate::dynamics::DynamicsSettings;
+use crate::dynamics::reacquisition::ReacquisitionSettings;
 use crate::observation::LikelihoodSettings;
 
 /// Writes `value` as `key` when `print`, and skips the field otherwise.
@@ -107,12 +110,15 @@ impl Serialize for TrackerConfig {
             self.has_clutter_switching() || *estimator != PoseEstimator::default(),
         )?;
         out.serialize_field("init_spread", init_spread)?;
-        field_if(
-            &mut out,
-            "reacquisition",
-            reacquisition,
-            reacquisition.is_some(),
-        )?;
+        if let Some(settings) = reacquisition {
+            let view = ReacquisitionView {
+                settings,
+                appearance: appearance.is_some(),
+            };
+            out.serialize_field("reacquisition", &view)?;
+        } else {
+            out.skip_field("reacquisition")?;
+        }
         field_if(
             &mut out,
             "working_radius",
@@ -219,6 +225,55 @@ impl Serialize for DynamicsView<'_> {
             hidden_exploration,
             self.hidden_chains || *hidden_exploration != default.hidden_exploration,
         )?;
+        out.end()
+    }
+}
+
+/// `reacquisition` as printed: `detection_share` only with an appearance model (or when not at
+/// its default).
+struct ReacquisitionView<'a> {
+    settings: &'a ReacquisitionSettings,
+    appearance: bool,
+}
+
+impl Serialize for ReacquisitionView<'_> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let ReacquisitionSettings {
+            lock_gamma,
+            shape_tolerance,
+            rollback,
+            share_rate,
+            max_share,
+            detection_share,
+            spread,
+            spread_growth,
+            position_gain,
+            velocity_gain,
+            shape_gain,
+        } = self.settings;
+        let default = ReacquisitionSettings::default();
+        let mut out = serializer.serialize_struct("ReacquisitionSettings", 11)?;
+        out.serialize_field("lock_gamma", lock_gamma)?;
+        field_if(
+            &mut out,
+            "shape_tolerance",
+            shape_tolerance,
+            shape_tolerance.is_some(),
+        )?;
+        out.serialize_field("rollback", rollback)?;
+        out.serialize_field("share_rate", share_rate)?;
+        out.serialize_field("max_share", max_share)?;
+        field_if(
+            &mut out,
+            "detection_share",
+            detection_share,
+            self.appearance || *detection_share != default.detection_share,
+        )?;
+        out.serialize_field("spread", spread)?;
+        out.serialize_field("spread_growth", spread_growth)?;
+        out.serialize_field("position_gain", position_gain)?;
+        out.serialize_field("velocity_gain", velocity_gain)?;
+        out.serialize_field("shape_gain", shape_gain)?;
         out.end()
     }
 }

@@ -209,6 +209,7 @@ pub const SETTING_RANGES: &[SettingRange] = &[
     closed("reacquisition.rollback", 0.0, 1000.0),
     closed("reacquisition.share_rate", 0.0, 1.0),
     closed("reacquisition.max_share", 0.0, 1.0),
+    closed("reacquisition.detection_share", 0.0, 1.0),
     positive("reacquisition.spread", 1000.0),
     closed("reacquisition.spread_growth", 0.0, 100.0),
     closed("reacquisition.position_gain", 0.0, 1.0),

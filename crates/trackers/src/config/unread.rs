@@ -4,6 +4,7 @@
 
 use super::{ClutterMode, MotionSettings, OcclusionMode, PoseEstimator, TrackerConfig};
 use crate::dynamics::DynamicsSettings;
+use crate::dynamics::reacquisition::ReacquisitionSettings;
 use crate::{Error, Result};
 
 /// Why `motion` is not read.
@@ -118,6 +119,16 @@ impl TrackerConfig {
                  tracker has neither",
             ));
         }
+        let detection_share = self.reacquisition.map_or(0.0, |r| r.detection_share);
+        if self.appearance.is_none()
+            && detection_share != ReacquisitionSettings::default().detection_share
+        {
+            return Err(unread(
+                "reacquisition.detection_share",
+                "the abrupt-motion jump is drawn around the appearance's detection, and this \
+                 tracker has no appearance model (`appearance`)",
+            ));
+        }
         Ok(())
     }
 }
@@ -163,6 +174,12 @@ mod tests {
         let mut c = Preset::WFixed.config(50, 1);
         c.dynamics.hidden_exploration = 0.1;
         assert_eq!(refused_as(&c).0, "dynamics.hidden_exploration");
+
+        let mut c = Preset::WOcc.config(50, 1);
+        c.reacquisition.as_mut().unwrap().detection_share = 0.1;
+        let (name, reason) = refused_as(&c);
+        assert_eq!(name, "reacquisition.detection_share");
+        assert!(reason.contains("appearance"), "{reason}");
     }
 
     #[test]
@@ -179,6 +196,9 @@ mod tests {
         c.validate().unwrap();
         let mut c = Preset::WEval.config(50, 1);
         c.dynamics.locked_gamma_rate = 2.0;
+        c.validate().unwrap();
+        let mut c = Preset::Head.config(50, 1);
+        c.reacquisition.as_mut().unwrap().detection_share = 0.1;
         c.validate().unwrap();
     }
 }

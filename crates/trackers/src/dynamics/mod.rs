@@ -110,6 +110,7 @@ impl TrackerDynamics {
         &self,
         previous: &Particle,
         next: &Particle,
+        as_prior: bool,
         log_continue: impl FnOnce() -> f64,
     ) -> f64 {
         log_mixture_density(
@@ -118,8 +119,26 @@ impl TrackerDynamics {
             self.jump_share(),
             Reacquisition::is_jump(&previous.now, &next.prev),
             &next.now,
+            as_prior,
             log_continue,
         )
+    }
+
+    /// Whether the jump's prior differs from the density it is drawn from (a centre uniform over
+    /// the search window, drawn around the detection), so that the prior as the proposal must
+    /// weigh its particles by their ratio.
+    pub fn jump_needs_weighting(&self) -> bool {
+        self.reacquisition
+            .as_ref()
+            .is_some_and(|r| r.share > 0.0 && r.uniform_area.is_some())
+    }
+
+    /// The density the prior draws `next` from: [`smc_core::Dynamics::log_density`] with the
+    /// jump's proposal in place of its prior.
+    pub fn log_sampling_density(&self, previous: &Particle, next: &Particle) -> f64 {
+        self.log_with_jump(previous, next, false, || {
+            self.log_kinematic_density(previous, next)
+        })
     }
 
     /// Draws the hidden variables of the next step from their transitions (Wu Fig. 6 steps 2b–2c
@@ -316,7 +335,7 @@ impl smc_core::Dynamics for TrackerDynamics {
     /// every proposal, so their densities cancel (see [`TrackerDynamics::sample_hidden`]); with a
     /// reacquisition component, the mixture density of the particle's component.
     fn log_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        self.log_with_jump(previous, next, || {
+        self.log_with_jump(previous, next, true, || {
             self.log_kinematic_density(previous, next)
         })
     }

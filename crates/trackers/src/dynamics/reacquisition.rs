@@ -22,6 +22,19 @@
 //! the particle came from. The two components have disjoint supports in c_k — a jump sets
 //! α_{k−1} = α_k − v, a continuation keeps α_{k−1} equal to the previous α_k — so the mixture
 //! density of a particle is that of its own component, times its share.
+//!
+//! **Abrupt motion** ([`ReacquisitionSettings::detection_share`] η_d > 0, with an appearance
+//! model). While the track is locked, every particle jumps with probability η_d to a pose whose
+//! centre is a priori uniform over the appearance's search window W (area |W|), at rest, in the
+//! last estimate's shape: the target may have moved anywhere it is searched for. The jump is
+//! drawn around the appearance's detection d instead, α_k ~ N((d, shape), diag σ²), so its
+//! particles carry prior over proposal, 1 / (|W| N(centre; d, σ²)) ([`Reacquisition::uniform_area`];
+//! the other components' Gaussians cancel), and the prior itself becomes a weighted proposal
+//! ([`crate::proposal::WeightedPrior`]). A detection wins the posterior only where its likelihood
+//! beats the continuation's by that factor, so one that merely ties with the target — a patch of
+//! background while the face turns — does not capture the track as readily as a share of the
+//! *model* would. Once the track is not locked, the reacquisition jump above takes over, its
+//! Gaussian the prior itself.
 
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -52,6 +65,14 @@ pub struct ReacquisitionSettings {
     pub share_rate: f64,
     /// η_max: the largest jump share.
     pub max_share: f64,
+    /// η_d: the share of the prior that jumps while the track is locked (abrupt motion; with an
+    /// appearance model only). A priori the jump's centre is uniform over the appearance's
+    /// search window, the window the target is believed to be in; it is drawn around the
+    /// appearance's detection, so a particle there is weighted by 1 / (window area × the
+    /// Gaussian's density): it wins only where its likelihood beats the continuation's by that
+    /// much. 0, the default and `head`'s, draws no jump while locked (docs/RESULTS.md measures
+    /// both).
+    pub detection_share: f64,
     /// Translation spread of the jump at the first unlocked frame, pixels.
     pub spread: f64,
     /// Growth of the translation spread per unlocked frame, pixels: the extrapolation's error
@@ -77,6 +98,7 @@ impl Default for ReacquisitionSettings {
             rollback: 5,
             share_rate: 0.02,
             max_share: 0.3,
+            detection_share: 0.0,
             spread: 3.0,
             spread_growth: 0.5,
             position_gain: 0.5,
@@ -95,6 +117,7 @@ impl ReacquisitionSettings {
         for (name, v) in [
             ("reacquisition.lock_gamma", self.lock_gamma),
             ("reacquisition.max_share", self.max_share),
+            ("reacquisition.detection_share", self.detection_share),
             ("reacquisition.position_gain", self.position_gain),
             ("reacquisition.velocity_gain", self.velocity_gain),
             ("reacquisition.shape_gain", self.shape_gain),
@@ -222,6 +245,10 @@ pub struct Reacquisition {
     pub velocity: StateVector,
     /// σ_k per component.
     pub sigmas: StateVector,
+    /// The area of the region the jump's centre is a priori uniform over (the appearance's
+    /// search window), the Gaussian around `mean` being only its proposal; `None`: the Gaussian
+    /// is the prior itself.
+    pub uniform_area: Option<f64>,
 }
 
 impl Reacquisition {
@@ -252,7 +279,26 @@ impl Reacquisition {
 
     /// log N(α_k; m_k, diag σ_k²) over the used dimensions (the α_{k−1} part is a point mass).
     pub fn log_density(&self, space: ShapeSpace, now: &StateVector) -> f64 {
+        self.log_gaussian(space, now, |_| true)
+    }
+
+    /// The jump's prior log-density: [`Reacquisition::log_density`], or with a uniform centre
+    /// ([`Reacquisition::uniform_area`]) −ln(area) plus the Gaussian of the other components.
+    pub fn log_prior_density(&self, space: ShapeSpace, now: &StateVector) -> f64 {
+        match self.uniform_area {
+            Some(area) => self.log_gaussian(space, now, |j| !space.is_translation(j)) - area.ln(),
+            None => self.log_density(space, now),
+        }
+    }
+
+    fn log_gaussian(
+        &self,
+        space: ShapeSpace,
+        now: &StateVector,
+        keep: impl Fn(usize) -> bool,
+    ) -> f64 {
         (0..space.dim())
+            .filter(|&j| keep(j))
             .map(|j| {
                 let z = (now[j] - self.mean[j]) / self.sigmas[j];
                 -0.5 * z * z - self.sigmas[j].ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
@@ -269,12 +315,18 @@ pub fn log_mixture_density(
     share: f64,
     jumped: bool,
     now: &StateVector,
+    as_prior: bool,
     log_continue: impl FnOnce() -> f64,
 ) -> f64 {
     match component {
         Some(c) if share > 0.0 => {
             if jumped {
-                share.ln() + c.log_density(space, now)
+                share.ln()
+                    + if as_prior {
+                        c.log_prior_density(space, now)
+                    } else {
+                        c.log_density(space, now)
+                    }
             } else {
                 (1.0 - share).ln() + log_continue()
             }
@@ -315,6 +367,7 @@ mod tests {
             mean: [20.0, 0.0, 0.0, 15.0, 100.0, 80.0],
             velocity: [0.0, 0.0, 0.0, 0.0, -2.0, 0.5],
             sigmas: [0.2, 0.1, 0.1, 0.2, 5.0, 5.0],
+            uniform_area: None,
         };
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
         let n = 20_000;
@@ -340,19 +393,69 @@ mod tests {
             mean: [0.0; 6],
             velocity: [0.0; 6],
             sigmas: [1.0; 6],
+            uniform_area: None,
         };
         let x = [0.5, -0.5, 0.0, 0.0, 0.0, 0.0];
-        let jump = log_mixture_density(Some(&r), space, 0.3, true, &x, || unreachable!());
-        assert!((jump - (0.3f64.ln() + r.log_density(space, &x))).abs() < 1e-12);
-        let cont = log_mixture_density(Some(&r), space, 0.3, false, &x, || -2.0);
-        assert!((cont - (0.7f64.ln() - 2.0)).abs() < 1e-12);
+        for as_prior in [true, false] {
+            let jump =
+                log_mixture_density(Some(&r), space, 0.3, true, &x, as_prior, || unreachable!());
+            assert!((jump - (0.3f64.ln() + r.log_density(space, &x))).abs() < 1e-12);
+            let cont = log_mixture_density(Some(&r), space, 0.3, false, &x, as_prior, || -2.0);
+            assert!((cont - (0.7f64.ln() - 2.0)).abs() < 1e-12);
+            assert_eq!(
+                log_mixture_density(None, space, 0.3, true, &x, as_prior, || -2.0),
+                -2.0
+            );
+            assert_eq!(
+                log_mixture_density(Some(&r), space, 0.0, false, &x, as_prior, || -2.0),
+                -2.0
+            );
+        }
+    }
+
+    #[test]
+    fn a_jump_uniform_over_the_window_is_weighted_by_prior_over_proposal() {
+        // Odobez space: translation in slots 0 and 1, scale and shape in 2 and 3.
+        let space = ShapeSpace::Odobez;
+        let r = Reacquisition {
+            share: 0.1,
+            mean: [10.0, 20.0, 30.0, 1.0, 0.0, 0.0],
+            velocity: [0.0; 6],
+            sigmas: [3.0, 3.0, 0.3, 0.01, 1.0, 1.0],
+            uniform_area: Some(4000.0),
+        };
+        let gaussian = |x: f64, m: f64, s: f64| {
+            -0.5 * ((x - m) / s).powi(2) - s.ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
+        };
+        for x in [
+            [10.0, 20.0, 30.0, 1.0, 0.0, 0.0],
+            [16.0, 14.0, 30.5, 0.99, 0.0, 0.0],
+            [-40.0, 90.0, 29.0, 1.02, 0.0, 0.0],
+        ] {
+            let shape = gaussian(x[2], 30.0, 0.3) + gaussian(x[3], 1.0, 0.01);
+            let proposal = gaussian(x[0], 10.0, 3.0) + gaussian(x[1], 20.0, 3.0) + shape;
+            assert!((r.log_density(space, &x) - proposal).abs() < 1e-9);
+            // The prior: the centre uniform over 4000 px², the same Gaussian elsewhere, so
+            // the weight's ratio is 1 / (area · N(centre; detection, σ)) whatever the shape.
+            let prior = shape - 4000f64.ln();
+            assert!((r.log_prior_density(space, &x) - prior).abs() < 1e-9);
+            let jump =
+                |as_prior| log_mixture_density(Some(&r), space, 0.1, true, &x, as_prior, || 0.0);
+            assert!((jump(true) - jump(false) - (prior - proposal)).abs() < 1e-9);
+            // A continuation's prior and proposal are the same.
+            let cont =
+                |as_prior| log_mixture_density(Some(&r), space, 0.1, false, &x, as_prior, || -3.0);
+            assert_eq!(cont(true), cont(false));
+        }
+        // Without the window, the Gaussian is the prior too.
+        let plain = Reacquisition {
+            uniform_area: None,
+            ..r
+        };
+        let x = [16.0, 14.0, 30.5, 0.99, 0.0, 0.0];
         assert_eq!(
-            log_mixture_density(None, space, 0.3, true, &x, || -2.0),
-            -2.0
-        );
-        assert_eq!(
-            log_mixture_density(Some(&r), space, 0.0, false, &x, || -2.0),
-            -2.0
+            plain.log_prior_density(space, &x),
+            plain.log_density(space, &x)
         );
     }
 
@@ -370,6 +473,14 @@ mod tests {
             },
             ReacquisitionSettings {
                 share_rate: f64::NAN,
+                ..Default::default()
+            },
+            ReacquisitionSettings {
+                detection_share: -0.1,
+                ..Default::default()
+            },
+            ReacquisitionSettings {
+                detection_share: 1.5,
                 ..Default::default()
             },
         ] {

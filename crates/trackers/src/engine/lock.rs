@@ -7,7 +7,7 @@ use dbn_switch::StatusEstimate;
 use super::ParticleTracker;
 use crate::dynamics::reacquisition::Reacquisition;
 use crate::frame::Frame;
-use crate::space::{StateVector, UNBOUNDED_CENTRE};
+use crate::space::{STATE_SLOTS, StateVector, UNBOUNDED_CENTRE};
 
 impl ParticleTracker {
     /// Records a locked estimate in the track memory of the reacquisition jump, keeping the last
@@ -30,18 +30,35 @@ impl ParticleTracker {
         }
     }
 
-    /// The reacquisition jump of frame `frame`: present when the configuration asks for it and
-    /// the frames since the last locked one are not locked (see [`crate::dynamics::reacquisition`]).
+    /// The jump component of frame `frame` (see [`crate::dynamics::reacquisition`]): once the
+    /// frames since the last locked one are not locked, the reacquisition jump; while locked,
+    /// with [`ReacquisitionSettings::detection_share`](crate::ReacquisitionSettings) and an
+    /// appearance model, the abrupt-motion jump to the appearance's detection.
     pub(super) fn reacquisition_component(&self, frame: usize) -> Option<Reacquisition> {
         let settings = self.config.reacquisition.as_ref()?;
+        let space = self.config.space;
         let gap = frame.saturating_sub(self.memory.last_locked() + 1);
-        let share = (settings.share_rate * gap as f64).min(settings.max_share);
-        if gap == 0 || share <= 0.0 {
+        let (share, mut mean, mut velocity, uniform_area) = if gap == 0 {
+            // A priori the target is anywhere in the search window; the detection only
+            // proposes where. The jump keeps the last estimate's shape.
+            let area = self.appearance.as_ref()?.window_area();
+            self.detection?;
+            let at_rest = [0.0; STATE_SLOTS];
+            (
+                settings.detection_share,
+                self.last_state,
+                at_rest,
+                Some(area),
+            )
+        } else {
+            let anchor = self.history.front().unwrap_or(&self.memory);
+            let (mean, velocity) = anchor.extrapolate(space, frame);
+            let share = (settings.share_rate * gap as f64).min(settings.max_share);
+            (share, mean, velocity, None)
+        };
+        if share <= 0.0 {
             return None;
         }
-        let space = self.config.space;
-        let anchor = self.history.front().unwrap_or(&self.memory);
-        let (mut mean, mut velocity) = anchor.extrapolate(space, frame);
         // With an appearance model, the jump is drawn around where the target's appearance is
         // best in the frame, at rest, rather than where its last motion would have carried it.
         if let Some(d) = self.detection {
@@ -59,6 +76,7 @@ impl ParticleTracker {
             mean,
             velocity,
             sigmas,
+            uniform_area,
         })
     }
 

@@ -44,7 +44,7 @@ use crate::observation::{
     FrameContext, FrameObservation, LikelihoodModel, ObservationTerm, ReferenceLines,
 };
 use crate::particle::{Particle, default_status};
-use crate::proposal::{ClusterMotion, ExploringPrior, MotionProposal};
+use crate::proposal::{ClusterMotion, MotionProposal, WeightedPrior};
 use crate::smoothing::SmoothedRun;
 use crate::space::{STATE_SLOTS, ShapeBounds, StateVector};
 use crate::{Error, Result};
@@ -203,8 +203,11 @@ impl ParticleTracker {
         };
         let filter = &mut self.filter;
         let weighted = match self.config.proposal {
-            ProposalKind::Prior if self.config.dynamics.hidden_exploration > 0.0 => {
-                let proposal = ExploringPrior(&self.dynamics);
+            ProposalKind::Prior
+                if self.config.dynamics.hidden_exploration > 0.0
+                    || self.dynamics.jump_needs_weighting() =>
+            {
+                let proposal = WeightedPrior(&self.dynamics);
                 let prior = Some(&self.dynamics);
                 propagate_and_weight(filter, set, &proposal, prior, &observation, seed, step)
             }
@@ -348,7 +351,8 @@ impl Tracker for ParticleTracker {
             if let Some(e) = last {
                 appearance.read(&frame, &e);
                 let unlocked = self.frame > self.memory.last_locked();
-                if unlocked && self.config.reacquisition.is_some() {
+                let share = self.config.reacquisition.map(|r| r.detection_share);
+                if share.is_some_and(|d| unlocked || d > 0.0) {
                     self.detection = appearance.detect(&e);
                 }
             }

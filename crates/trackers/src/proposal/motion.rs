@@ -229,7 +229,7 @@ impl smc_core::Proposal for MotionProposal<'_> {
     /// [`ReacquisitionSettings`](crate::ReacquisitionSettings)) or the continuation below, times 1 − η; less the hidden chains'
     /// exploration ratio (`TrackerDynamics::log_hidden_exploration_ratio`, 0 by default).
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
-        self.dynamics.log_with_jump(previous, next, || {
+        self.dynamics.log_with_jump(previous, next, false, || {
             self.log_continuation_density(previous, next)
         }) - self.dynamics.log_hidden_exploration_ratio(previous, next)
     }
@@ -261,7 +261,7 @@ impl MotionProposal<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::proposal::ExploringPrior;
+    use crate::proposal::WeightedPrior;
 
     #[test]
     fn affine_increment_matches_a_direct_warp() {
@@ -379,7 +379,7 @@ mod tests {
         let mut switched = 0;
         for _ in 0..400 {
             for next in [
-                ExploringPrior(&dynamics).sample(0, &previous, &mut rng),
+                WeightedPrior(&dynamics).sample(0, &previous, &mut rng),
                 motion(&dynamics, &clusters).sample(0, &previous, &mut rng),
             ] {
                 let (i, j) = (previous.clutter.beta, next.clutter.beta);
@@ -392,7 +392,7 @@ mod tests {
                 );
                 // Eq. 3's p / q is the hidden chains' T / q.
                 let weight = Dynamics::log_density(&dynamics, &previous, &next)
-                    - ExploringPrior(&dynamics).log_density(0, &previous, &next);
+                    - WeightedPrior(&dynamics).log_density(0, &previous, &next);
                 assert!((weight - ratio).abs() < 1e-9, "{weight} vs {ratio}");
             }
         }
