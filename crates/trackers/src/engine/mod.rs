@@ -85,8 +85,9 @@ pub struct ParticleTracker {
     visibility: Option<Visibility>,
     /// The target's appearance and its lock chain, when the configuration has them.
     appearance: Option<Appearance>,
-    /// This frame's best appearance detection while the track is not locked: where the
-    /// reacquisition component draws (see [`crate::dynamics::reacquisition`]).
+    /// This frame's best appearance detection while the track is not locked, and on every frame
+    /// with [`crate::ReacquisitionSettings::detection_share`] > 0: where the jump component draws
+    /// (see [`crate::dynamics::reacquisition`]).
     detection: Option<[f64; 2]>,
     size: (usize, usize),
     frame: usize,
@@ -351,8 +352,12 @@ impl Tracker for ParticleTracker {
             if let Some(e) = last {
                 appearance.read(&frame, &e);
                 let unlocked = self.frame > self.memory.last_locked();
-                let share = self.config.reacquisition.map(|r| r.detection_share);
-                if share.is_some_and(|d| unlocked || d > 0.0) {
+                let jumps = self
+                    .config
+                    .reacquisition
+                    .as_ref()
+                    .is_some_and(|r| unlocked || r.detection_share > 0.0);
+                if jumps {
                     self.detection = appearance.detect(&e);
                 }
             }
