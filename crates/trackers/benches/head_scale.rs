@@ -4,13 +4,15 @@
 //! working scale set by the target's size). The frames are real when the development set sits
 //! beside the checkout (`../shared/data/real/Boy/img/0001.jpg`, and the same frame halved),
 //! synthetic texture otherwise; each update tracks the same frame again, so the cost is the
-//! steady state (for `m3` and `full`, of estimating a zero motion).
+//! steady state (for `m3` and `full`, of estimating a zero motion). `head_abrupt_motion` is
+//! `head` with the opt-in abrupt-motion jump (`reacquisition.detection_share` 0.1), whose
+//! detection searches the window on every frame.
 
 use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_main};
-use trackers::{Frame, Preset, build};
+use trackers::{Frame, Preset, TrackerConfig, build};
 use vision_core::Ellipse;
 
 /// RGB bytes of a `w`×`h` frame: the real frame scaled to that size, or a hash texture.
@@ -32,8 +34,8 @@ fn rgb_frame(w: u32, h: u32) -> (Vec<u8>, &'static str) {
     (out, "synthetic")
 }
 
-fn update_against_size(c: &mut Criterion, preset: Preset) {
-    let mut group = c.benchmark_group(format!("{}_update_200_particles", preset.name()));
+fn update_against_size(c: &mut Criterion, name: &str, config: &TrackerConfig) {
+    let mut group = c.benchmark_group(format!("{name}_update_200_particles"));
     group.throughput(Throughput::Elements(1));
     group.sample_size(30);
     for (w, h, head_w, head_h) in [(320u32, 240u32, 50.0, 60.0), (640, 480, 150.0, 200.0)] {
@@ -53,7 +55,7 @@ fn update_against_size(c: &mut Criterion, preset: Preset) {
             b: head_h / 2.0,
             angle: 0.0,
         };
-        let Ok(mut tracker) = build(preset.config(200, 1)) else {
+        let Ok(mut tracker) = build(config.clone()) else {
             continue;
         };
         if tracker.init(frame, start).is_err() {
@@ -70,8 +72,13 @@ fn update_against_size(c: &mut Criterion, preset: Preset) {
 fn benches() {
     let mut c = Criterion::default().configure_from_args();
     for preset in [Preset::Head, Preset::M3, Preset::Full] {
-        update_against_size(&mut c, preset);
+        update_against_size(&mut c, preset.name(), &preset.config(200, 1));
     }
+    let mut abrupt = Preset::Head.config(200, 1);
+    if let Some(r) = abrupt.reacquisition.as_mut() {
+        r.detection_share = 0.1;
+    }
+    update_against_size(&mut c, "head_abrupt_motion", &abrupt);
 }
 
 criterion_main!(benches);
