@@ -1,9 +1,11 @@
-//! Reacquisition after an occlusion: a jump component of the transition prior, drawn around the
-//! constant-velocity extrapolation of the last confidently locked estimate.
+//! The jump component of the transition prior: reacquisition after an occlusion, drawn around
+//! the constant-velocity extrapolation of the last confidently locked estimate (or the
+//! appearance's detection), and, opt-in, a jump for abrupt motion while the track is locked.
 //!
 //! Beyond both papers, in the spirit of Isard & Blake's ICONDENSATION (a share of the particles
 //! from a second importance function, the rest from the prior). While the track is locked the
-//! component is absent and the filter is exactly the preset's. Once the reported estimate stops
+//! component is absent and the filter is exactly the preset's (unless the abrupt-motion jump
+//! below is configured). Once the reported estimate stops
 //! being locked (γ̂ high, α̂ not locked, or a contour whose size or elongation departs from the
 //! remembered one), every particle jumps with probability η = min(η_max, r · gap), `gap` the
 //! number of unlocked frames so far, to
