@@ -19,7 +19,7 @@ use crate::commands::run::progress_of;
 use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
 use crate::metrics::{SequenceMetrics, score_run, with_self_evaluation};
 use crate::output::{OutputFolder, write_atomic};
-use crate::sequence::{Frame, FrameSource, open_sequence, read_all};
+use crate::sequence::{Frame, FrameSource, open_sequence, read_every};
 use crate::session::Session;
 use crate::{AppError, Result};
 
@@ -274,18 +274,16 @@ pub fn run(args: &OtbArgs) -> Result<()> {
     for (si, seq) in prepared.iter().enumerate() {
         bar.set_message(format!("OTB ({})", seq.name));
         let mut source = open_sequence(&seq.dir.to_string_lossy())?.source;
-        let frames: Vec<Frame> = read_all(&mut source)?;
-        if frames.len() != seq.frames {
+        let (frames, read) = read_every(&mut source, step)?;
+        if read != seq.frames {
             return Err(AppError::input(
                 &seq.dir,
                 format!(
-                    "{} frames read, {} expected: the folder changed during the evaluation",
-                    frames.len(),
+                    "{read} frames read, {} expected: the folder changed during the evaluation",
                     seq.frames
                 ),
             ));
         }
-        let frames: Vec<Frame> = frames.into_iter().step_by(step).collect();
         let jobs: Vec<(usize, usize, usize)> = (0..protocols.len())
             .flat_map(|pi| {
                 (0..configs.len())

@@ -238,7 +238,7 @@ impl FrameSource for ImageFolder {
 mod tests {
     use super::*;
     use crate::sequence::tests::write_png;
-    use crate::sequence::{open_sequence, read_all};
+    use crate::sequence::{open_sequence, read_all, read_every};
     use image::GrayImage;
 
     #[test]
@@ -270,6 +270,37 @@ mod tests {
         assert!((frames[1].grey.as_raw()[0] - 0.587 * 255.0).abs() < 1e-3);
         assert_eq!(frames[1].index, 1);
         assert!(src.next_frame().unwrap().is_none());
+    }
+
+    #[test]
+    fn read_every_keeps_every_kth_frame_from_the_first_and_counts_them_all() {
+        let dir = tempfile::tempdir().unwrap();
+        for k in 1..=5u8 {
+            write_png(&dir.path().join(format!("{k:04}.png")), 2, 2, |_, _| {
+                [10 * k, 0, 0]
+            });
+        }
+        for (step, names) in [
+            (1, &["0001", "0002", "0003", "0004", "0005"][..]),
+            (2, &["0001", "0003", "0005"][..]),
+            (3, &["0001", "0004"][..]),
+            (9, &["0001"][..]),
+        ] {
+            let mut src = ImageFolder::open(dir.path()).unwrap();
+            let (frames, read) = read_every(&mut src, step).unwrap();
+            assert_eq!(read, 5, "step {step}");
+            let kept: Vec<&str> = frames
+                .iter()
+                .map(|f| {
+                    std::path::Path::new(&f.name)
+                        .file_stem()
+                        .unwrap()
+                        .to_str()
+                        .unwrap()
+                })
+                .collect();
+            assert_eq!(kept, names, "step {step}");
+        }
     }
 
     #[test]

@@ -144,11 +144,25 @@ pub struct SequenceInfo {
 /// # Errors
 /// The first error of [`FrameSource::next_frame`].
 pub fn read_all(source: &mut dyn FrameSource) -> Result<Vec<Frame>> {
-    let mut frames = Vec::with_capacity(source.len().unwrap_or(0));
+    read_every(source, 1).map(|(frames, _)| frames)
+}
+
+/// Reads every remaining frame of `source` and keeps every `step`-th from the first (`step` ≥ 1;
+/// 0 is read as 1), with the number of frames read: only the frames kept are held in memory.
+///
+/// # Errors
+/// The first error of [`FrameSource::next_frame`].
+pub fn read_every(source: &mut dyn FrameSource, step: usize) -> Result<(Vec<Frame>, usize)> {
+    let step = step.max(1);
+    let mut frames = Vec::with_capacity(source.len().unwrap_or(0).div_ceil(step));
+    let mut read = 0;
     while let Some(f) = source.next_frame()? {
-        frames.push(f);
+        if read % step == 0 {
+            frames.push(f);
+        }
+        read += 1;
     }
-    Ok(frames)
+    Ok((frames, read))
 }
 
 /// What kind of input a sequence argument named.

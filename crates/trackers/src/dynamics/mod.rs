@@ -14,7 +14,7 @@
 use dbn_switch::{ClutterHmm, OcclusionProcess, OcclusionState, StatusHmm, StatusState};
 use rand::Rng;
 
-use crate::dynamics::reacquisition::{Reacquisition, log_mixture_density};
+use crate::dynamics::reacquisition::{JumpDensity, Reacquisition, log_mixture_density};
 use crate::particle::Particle;
 use crate::space::{ShapeBounds, ShapeSpace, StateVector};
 pub mod reacquisition;
@@ -54,8 +54,9 @@ pub struct TrackerDynamics {
     pub occlusion: OcclusionModel,
     /// The domain of the states, set from the initial contour by the tracker.
     pub bounds: ShapeBounds,
-    /// The reacquisition jump of the current frame, set by the tracker while the track is not
-    /// locked (see [`crate::dynamics::reacquisition`]); `None`: the plain prior.
+    /// The jump component of the current frame, set by the tracker while the track is not
+    /// locked, and while it is with an abrupt-motion share (see
+    /// [`crate::dynamics::reacquisition`]); `None`: the plain prior.
     pub reacquisition: Option<Reacquisition>,
     /// The mean shape of [`DynamicsSettings::shape_reversion`], set by the tracker each frame
     /// (the shape remembered over the locked estimates); `None`: no pull.
@@ -104,13 +105,14 @@ impl TrackerDynamics {
         next
     }
 
-    /// The density of `next` under the mixture of the jump (share η) and the continuation whose
-    /// log-density `log_continue` computes (see [`crate::dynamics::reacquisition::log_mixture_density`]).
+    /// The density of `next` under the mixture of the jump (share η, its `density`) and the
+    /// continuation whose log-density `log_continue` computes (see
+    /// [`crate::dynamics::reacquisition::log_mixture_density`]).
     pub fn log_with_jump(
         &self,
         previous: &Particle,
         next: &Particle,
-        as_prior: bool,
+        density: JumpDensity,
         log_continue: impl FnOnce() -> f64,
     ) -> f64 {
         log_mixture_density(
@@ -119,7 +121,7 @@ impl TrackerDynamics {
             self.jump_share(),
             Reacquisition::is_jump(&previous.now, &next.prev),
             &next.now,
-            as_prior,
+            density,
             log_continue,
         )
     }
@@ -136,7 +138,7 @@ impl TrackerDynamics {
     /// The density the prior draws `next` from: [`smc_core::Dynamics::log_density`] with the
     /// jump's proposal in place of its prior.
     pub fn log_sampling_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        self.log_with_jump(previous, next, false, || {
+        self.log_with_jump(previous, next, JumpDensity::Sampling, || {
             self.log_kinematic_density(previous, next)
         })
     }
@@ -335,7 +337,7 @@ impl smc_core::Dynamics for TrackerDynamics {
     /// every proposal, so their densities cancel (see [`TrackerDynamics::sample_hidden`]); with a
     /// reacquisition component, the mixture density of the particle's component.
     fn log_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        self.log_with_jump(previous, next, true, || {
+        self.log_with_jump(previous, next, JumpDensity::Prior, || {
             self.log_kinematic_density(previous, next)
         })
     }

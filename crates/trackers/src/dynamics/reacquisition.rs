@@ -312,25 +312,34 @@ impl Reacquisition {
     }
 }
 
-/// log((1 − η) e^{log_continue}) for a continuation and log(η N(α_k; m_k, σ_k)) for a jump: the
-/// density of a particle under a mixture whose components have disjoint supports.
+/// Which of a jump's densities a mixture density reads: the model's, or the one the jump is drawn
+/// from. They differ only for a jump uniform over the window ([`Reacquisition::uniform_area`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JumpDensity {
+    /// The prior's ([`Reacquisition::log_prior_density`]).
+    Prior,
+    /// The proposal's ([`Reacquisition::log_density`]).
+    Sampling,
+}
+
+/// log((1 − η) e^{log_continue}) for a continuation and log(η q(α_k)) for a jump, q the jump's
+/// `density`: the density of a particle under a mixture whose components have disjoint supports.
 pub fn log_mixture_density(
     component: Option<&Reacquisition>,
     space: ShapeSpace,
     share: f64,
     jumped: bool,
     now: &StateVector,
-    as_prior: bool,
+    density: JumpDensity,
     log_continue: impl FnOnce() -> f64,
 ) -> f64 {
     match component {
         Some(c) if share > 0.0 => {
             if jumped {
                 share.ln()
-                    + if as_prior {
-                        c.log_prior_density(space, now)
-                    } else {
-                        c.log_density(space, now)
+                    + match density {
+                        JumpDensity::Prior => c.log_prior_density(space, now),
+                        JumpDensity::Sampling => c.log_density(space, now),
                     }
             } else {
                 (1.0 - share).ln() + log_continue()
@@ -401,18 +410,18 @@ mod tests {
             uniform_area: None,
         };
         let x = [0.5, -0.5, 0.0, 0.0, 0.0, 0.0];
-        for as_prior in [true, false] {
+        for density in [JumpDensity::Prior, JumpDensity::Sampling] {
             let jump =
-                log_mixture_density(Some(&r), space, 0.3, true, &x, as_prior, || unreachable!());
+                log_mixture_density(Some(&r), space, 0.3, true, &x, density, || unreachable!());
             assert!((jump - (0.3f64.ln() + r.log_density(space, &x))).abs() < 1e-12);
-            let cont = log_mixture_density(Some(&r), space, 0.3, false, &x, as_prior, || -2.0);
+            let cont = log_mixture_density(Some(&r), space, 0.3, false, &x, density, || -2.0);
             assert!((cont - (0.7f64.ln() - 2.0)).abs() < 1e-12);
             assert_eq!(
-                log_mixture_density(None, space, 0.3, true, &x, as_prior, || -2.0),
+                log_mixture_density(None, space, 0.3, true, &x, density, || -2.0),
                 -2.0
             );
             assert_eq!(
-                log_mixture_density(Some(&r), space, 0.0, false, &x, as_prior, || -2.0),
+                log_mixture_density(Some(&r), space, 0.0, false, &x, density, || -2.0),
                 -2.0
             );
         }
@@ -445,12 +454,15 @@ mod tests {
             let prior = shape - 4000f64.ln();
             assert!((r.log_prior_density(space, &x) - prior).abs() < 1e-9);
             let jump =
-                |as_prior| log_mixture_density(Some(&r), space, 0.1, true, &x, as_prior, || 0.0);
-            assert!((jump(true) - jump(false) - (prior - proposal)).abs() < 1e-9);
+                |density| log_mixture_density(Some(&r), space, 0.1, true, &x, density, || 0.0);
+            assert!(
+                (jump(JumpDensity::Prior) - jump(JumpDensity::Sampling) - (prior - proposal)).abs()
+                    < 1e-9
+            );
             // A continuation's prior and proposal are the same.
             let cont =
-                |as_prior| log_mixture_density(Some(&r), space, 0.1, false, &x, as_prior, || -3.0);
-            assert_eq!(cont(true), cont(false));
+                |density| log_mixture_density(Some(&r), space, 0.1, false, &x, density, || -3.0);
+            assert_eq!(cont(JumpDensity::Prior), cont(JumpDensity::Sampling));
         }
         // Without the window, the Gaussian is the prior too.
         let plain = Reacquisition {

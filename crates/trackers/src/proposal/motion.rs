@@ -7,6 +7,7 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::dynamics::TrackerDynamics;
+use crate::dynamics::reacquisition::JumpDensity;
 use crate::particle::Particle;
 use crate::space::{STATE_SLOTS, ShapeSpace, StateVector, axpy};
 
@@ -225,13 +226,16 @@ impl smc_core::Proposal for MotionProposal<'_> {
         next
     }
 
-    /// The density of the particle's component: the jump (share η, identical to the prior's, see
-    /// [`ReacquisitionSettings`](crate::ReacquisitionSettings)) or the continuation below, times 1 − η; less the hidden chains'
-    /// exploration ratio (`TrackerDynamics::log_hidden_exploration_ratio`, 0 by default).
+    /// The density of the particle's component: the jump (share η, drawn as the prior draws it,
+    /// see [`ReacquisitionSettings`](crate::ReacquisitionSettings)) or the continuation below,
+    /// times 1 − η; less the hidden chains' exploration ratio
+    /// (`TrackerDynamics::log_hidden_exploration_ratio`, 0 by default).
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
-        self.dynamics.log_with_jump(previous, next, false, || {
-            self.log_continuation_density(previous, next)
-        }) - self.dynamics.log_hidden_exploration_ratio(previous, next)
+        self.dynamics
+            .log_with_jump(previous, next, JumpDensity::Sampling, || {
+                self.log_continuation_density(previous, next)
+            })
+            - self.dynamics.log_hidden_exploration_ratio(previous, next)
     }
 }
 
