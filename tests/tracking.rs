@@ -1,8 +1,8 @@
 //! End-to-end tracking on generated sequences with exact ground truth: every preset follows a
 //! short sequence, the motion proposal survives an abrupt motion that breaks CONDENSATION with
 //! tight dynamics, the occlusion process rises with a real occlusion, the reacquisition jump
-//! finds the target again after it, and the detection jump keeps `head` on a target whose
-//! motion outruns its prior.
+//! finds the target again after it, the detection jump keeps `head` on a target whose motion
+//! outruns its prior, and `head` follows a target that zooms.
 
 use scene_synth::{FrameTruth, Scenario, ScenarioParams, Scene};
 use trackers::{Estimate, Preset, TrackerConfig, build};
@@ -19,7 +19,11 @@ struct Clip {
 fn clip(scenario: Scenario, frames: usize) -> Clip {
     let mut p = ScenarioParams::preset(scenario);
     p.frames = frames;
-    let scene = Scene::new(&p, 1).unwrap();
+    render(&p)
+}
+
+fn render(p: &ScenarioParams) -> Clip {
+    let scene = Scene::new(p, 1).unwrap();
     let (width, height) = scene.size();
     let mut out = Clip {
         width,
@@ -261,5 +265,36 @@ fn the_detection_jump_keeps_head_on_a_target_that_outruns_its_prior() {
             with > without + 0.03,
             "seed {seed}: {with:.3} with the jump, {without:.3} without"
         );
+    }
+}
+
+#[test]
+fn head_follows_a_target_that_zooms_out_and_back() {
+    // The zoom scene with two changes of 60 % over 10 frames: the target's size goes from 50 px
+    // to 20 px and back to 32 px. Held-out footage had targets that zoom; a pull of the size
+    // towards a remembered one (`dynamics.shape_reversion` 0.05, which gains on the development
+    // set) fails here: the box stays near 43 px while the target is 20 px, mean IoU 0.48 on
+    // seed 1 (docs/RESULTS.md, decision log). `head`'s mean IoU: 0.82, 0.83, 0.81.
+    let mut p = ScenarioParams::preset(Scenario::Zoom);
+    p.frames = 200;
+    let changes = p.scale_changes.as_mut().unwrap();
+    changes.count = 2;
+    changes.magnitude = [0.6, 0.6];
+    changes.bounds = [0.4, 2.0];
+    changes.duration = 10;
+    let clip = render(&p);
+    let sizes: Vec<f64> = clip.truth.iter().map(|t| t.bbox.area().sqrt()).collect();
+    let (small, large) = sizes
+        .iter()
+        .fold((f64::MAX, 0.0_f64), |(lo, hi), &s| (lo.min(s), hi.max(s)));
+    assert!(
+        large > 2.0 * small,
+        "the scene zooms by {:.2}",
+        large / small
+    );
+    for seed in 1..=3 {
+        let m = mean(&ious(&clip, &track(&clip, Preset::Head.config(200, seed))));
+        println!("seed {seed}: head's mean IoU through the zoom {m:.3}");
+        assert!(m > 0.65, "seed {seed}: mean IoU {m:.3} through the zoom");
     }
 }

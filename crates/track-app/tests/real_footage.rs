@@ -94,6 +94,15 @@ fn head_holds_faceocc1_through_the_book_and_its_p_lost_says_when_it_is_covered()
             .collect();
         let n = truth.len();
         let (covered, after) = (mean(&overlap, 501, 600), mean(&overlap, 601, n));
+        let peak =
+            |first: usize, last: usize| p_lost[first - 1..last].iter().cloned().fold(0.0, f64::max);
+        println!(
+            "seed {seed}: IoU {:.3} before the book, {covered:.3} while covered, {after:.3} \
+             after; P(lost) peaks at {:.3} while covered, {:.3} after",
+            mean(&overlap, 2, 500),
+            peak(501, 600),
+            peak(601, n)
+        );
         // Held after the book: the overlap comes back to the level before it, well above
         // what it was while the face was covered.
         assert!(
@@ -105,8 +114,6 @@ fn head_holds_faceocc1_through_the_book_and_its_p_lost_says_when_it_is_covered()
             "seed {seed}: lost before the book"
         );
         // P(lost) rises while the face is covered and falls back once it is visible again.
-        let peak =
-            |first: usize, last: usize| p_lost[first - 1..last].iter().cloned().fold(0.0, f64::max);
         assert!(
             peak(501, 600) > 0.2 && peak(601, n) < 0.1,
             "seed {seed}: P(lost) peaks at {:.3} while covered and {:.3} after",
