@@ -728,3 +728,108 @@ fn a_frame_step_scores_the_sequence_as_a_folder_of_the_frames_it_keeps() {
         common::stderr(&o)
     );
 }
+
+#[test]
+fn paired_compares_two_trackers_seed_by_seed_and_refuses_what_it_cannot_pair() {
+    let dir = tempfile::tempdir().unwrap();
+    let seq = otb_folder(dir.path(), "disc", 12, true_line);
+    let run = |tracker: &str, seed: &str| {
+        let out = dir.path().join(format!("{tracker}-{seed}"));
+        let o = track(&[
+            "eval",
+            "otb",
+            s(&seq),
+            "--tracker",
+            tracker,
+            "--seed",
+            seed,
+            "--protocol",
+            "ope",
+            "--protocol",
+            "tre",
+            "--out",
+            s(&out),
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        out
+    };
+    let base: Vec<PathBuf> = ["1", "2", "3"].iter().map(|k| run("head", k)).collect();
+    let variant: Vec<PathBuf> = ["1", "2", "3"].iter().map(|k| run("m1", k)).collect();
+    let paired = |base: &[PathBuf], variant: &[PathBuf], extra: &[&str]| {
+        let mut args = vec!["eval", "paired"];
+        for b in base {
+            args.extend(["--base", s(b)]);
+        }
+        for v in variant {
+            args.extend(["--variant", s(v)]);
+        }
+        args.extend(extra);
+        track(&args)
+    };
+    let report = dir.path().join("paired.md");
+    let o = paired(&base, &variant, &["--out", s(&report)]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    // The protocols every folder holds, each with its one sequence; the file holds the same.
+    assert!(text.contains("## OPE: the variant helps"), "{text}");
+    assert!(text.contains("## TRE: the variant helps"), "{text}");
+    assert!(!text.contains("## SRE"), "{text}");
+    assert!(text.contains("3 pairs (seeds)"), "{text}");
+    assert_eq!(
+        std::fs::read_to_string(&report).unwrap().trim_end(),
+        text.trim_end()
+    );
+    // Each column is the mean over the seeds of what `track eval otb` wrote.
+    let mean_auc = |dirs: &[PathBuf], tracker: &str| {
+        dirs.iter()
+            .map(|d| {
+                row(&csv_rows(d, "tre"), "disc", tracker)[6]
+                    .parse::<f64>()
+                    .unwrap()
+            })
+            .sum::<f64>()
+            / dirs.len() as f64
+    };
+    let tre = &text[text.find("## TRE").unwrap()..];
+    let line = tre.lines().find(|l| l.starts_with("| disc |")).unwrap();
+    let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+    assert_eq!(
+        cells[2],
+        format!("{:.3}", mean_auc(&base, "head")),
+        "{line}"
+    );
+    assert_eq!(
+        cells[3],
+        format!("{:.3}", mean_auc(&variant, "m1")),
+        "{line}"
+    );
+    // What cannot be paired is refused, naming why: one seed, unequal counts, no results.
+    for (b, v) in [(&base[..1], &variant[..1]), (&base[..], &variant[..2])] {
+        let o = paired(b, v, &[]);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(
+            one_error_line(&o).contains("at least two"),
+            "{}",
+            common::stderr(&o)
+        );
+    }
+    let o = paired(
+        &base,
+        &[dir.path().into(), dir.path().into(), dir.path().into()],
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(one_error_line(&o).contains("no protocol"));
+    // A malformed otb.csv is bad input (exit 3), named by its path.
+    let broken = dir.path().join("broken");
+    std::fs::create_dir_all(broken.join("tre")).unwrap();
+    std::fs::write(broken.join("tre/otb.csv"), "protocol,sequence\ntre,disc\n").unwrap();
+    let o = paired(
+        &base,
+        &[broken.clone(), broken.clone(), broken.clone()],
+        &["--protocol", "tre"],
+    );
+    assert_eq!(o.status.code(), Some(3));
+    assert!(one_error_line(&o).contains("otb.csv"));
+}

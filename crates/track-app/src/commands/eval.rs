@@ -1,4 +1,5 @@
-//! `track eval`: Odobez's Table 1, the accuracy of Wu's hidden processes, and OTB benchmarks.
+//! `track eval`: Odobez's Table 1, the accuracy of Wu's hidden processes, OTB benchmarks, and the
+//! paired comparison of two trackers' OTB results over seeds.
 
 use std::path::{Path, PathBuf};
 
@@ -43,6 +44,50 @@ pub enum Evaluation {
     /// OTB benchmark's protocols OPE, TRE and SRE, beside other trackers' boxes.
     #[command(after_help = OTB_HELP)]
     Otb(OtbArgs),
+    /// Whether a variant helps or hurts each sequence, judged over seeds: the results of
+    /// `track eval otb` for the base and the variant, one folder per seed in the same order,
+    /// compared seed by seed (a one-sided paired t-test on each sequence's success AUC).
+    #[command(after_help = PAIRED_HELP)]
+    Paired(PairedArgs),
+}
+
+const PAIRED_HELP: &str = "\
+Each --base folder is paired with the --variant folder in the same position: run both with the
+same seeds (--seed 1, 2, 3 ...), on the same sequences. A sequence counts as helped (hurt) when the
+mean of its paired differences in success AUC is positive (negative) by a one-sided t-test at
+--level: a difference larger than that sequence's own seed-to-seed noise. Prints a Markdown
+table per protocol; --out also writes it to a file.
+
+Example:
+  for s in 1 2 3; do
+    track eval otb $SEQS --tracker head --seed $s --protocol tre --out base-$s
+    track eval otb $SEQS --config variant.json --seed $s --protocol tre --out variant-$s
+  done
+  track eval paired --base base-1 --base base-2 --base base-3 \\
+    --variant variant-1 --variant variant-2 --variant variant-3 --protocol tre";
+
+/// Arguments of `track eval paired`.
+#[derive(Debug, clap::Args)]
+pub struct PairedArgs {
+    /// A `track eval otb` output folder of the base, one per seed (repeatable, at least two).
+    #[arg(long = "base", required = true)]
+    pub base: Vec<PathBuf>,
+    /// A `track eval otb` output folder of the variant, one per seed, in the base's order.
+    #[arg(long = "variant", required = true)]
+    pub variant: Vec<PathBuf>,
+    /// Protocols to compare (repeatable; default: each of ope, tre, sre whose `otb.csv` every
+    /// folder holds).
+    #[arg(long = "protocol", value_enum)]
+    pub protocols: Vec<Protocol>,
+    /// The tracker's name in the `otb.csv` files (default: each file's only tracker).
+    #[arg(long)]
+    pub tracker: Option<String>,
+    /// The one-sided level of the test.
+    #[arg(long, default_value_t = 0.05)]
+    pub level: f64,
+    /// Also write the report (Markdown) to this file.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 const OTB_HELP: &str = "\
@@ -261,7 +306,51 @@ pub fn run(args: &Args) -> Result<()> {
         Evaluation::Table1(a) => run_table1(a),
         Evaluation::Switching(a) => run_switching(a),
         Evaluation::Otb(a) => run_otb(a),
+        Evaluation::Paired(a) => run_paired(a),
     }
+}
+
+/// `track eval paired`: prints (and with `--out` writes) the paired comparison per protocol.
+fn run_paired(args: &PairedArgs) -> Result<()> {
+    use crate::otb::paired::{compare, csv_paths, markdown, read_auc};
+    let protocols: Vec<Protocol> = if args.protocols.is_empty() {
+        [Protocol::Ope, Protocol::Tre, Protocol::Sre]
+            .into_iter()
+            .filter(|&p| {
+                csv_paths(&args.base, p)
+                    .iter()
+                    .chain(&csv_paths(&args.variant, p))
+                    .all(|f| f.is_file())
+            })
+            .collect()
+    } else {
+        args.protocols.clone()
+    };
+    if protocols.is_empty() {
+        return Err(AppError::InvalidSetting {
+            name: "--base and --variant".into(),
+            reason: "no protocol has an otb.csv in every folder (PROTOCOL/otb.csv, as `track \
+                     eval otb --out` writes)"
+                .into(),
+        });
+    }
+    let mut report = String::new();
+    for protocol in protocols {
+        let read = |dirs: &[PathBuf]| -> Result<Vec<_>> {
+            csv_paths(dirs, protocol)
+                .iter()
+                .map(|f| read_auc(f, args.tracker.as_deref()))
+                .collect()
+        };
+        let comparison = compare(&read(&args.base)?, &read(&args.variant)?, args.level)?;
+        report.push_str(&markdown(protocol, &comparison, args.level));
+        report.push('\n');
+    }
+    if let Some(out) = &args.out {
+        write_atomic(out, report.as_bytes())?;
+    }
+    crate::output::println_stdout(report.trim_end())?;
+    Ok(())
 }
 
 /// `track eval table1`: writes table1.md and table1.csv and prints the table.

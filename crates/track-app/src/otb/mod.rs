@@ -27,6 +27,7 @@ use crate::{AppError, Result};
 
 pub mod eval;
 pub mod page;
+pub mod paired;
 pub mod plots;
 
 /// Runs of TRE per sequence (before dropping duplicate starts).
