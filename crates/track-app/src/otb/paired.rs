@@ -72,7 +72,6 @@ pub fn read_auc(path: &Path, tracker: Option<&str>) -> Result<AucTable> {
         Some(t) => t.to_owned(),
         None => {
             let mut names: Vec<&str> = rows.iter().map(|r| r.1.as_str()).collect();
-            names.dedup();
             names.sort_unstable();
             names.dedup();
             match names.as_slice() {
