@@ -373,6 +373,27 @@ mod tests {
     }
 
     #[test]
+    fn a_file_of_several_trackers_needs_one_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("otb.csv");
+        std::fs::write(
+            &path,
+            "protocol,sequence,tracker,runs,frames,labelled,success_auc,precision_20,mean_iou,fps,lost_auc\n\
+             tre,a,head,10,100,90,0.7000,0.9,0.7,500.00,0.95\n\
+             tre,a,csrt,10,100,90,0.6000,0.8,0.6,,\n\
+             tre,mean,head,10,100,90,0.7000,0.9,0.7,500.00,0.95\n\
+             tre,mean,csrt,10,100,90,0.6000,0.8,0.6,,\n",
+        )
+        .unwrap();
+        let err = read_auc(&path, None).unwrap_err().to_string();
+        assert!(err.contains("several trackers (csrt, head)"), "{err}");
+        let csrt = read_auc(&path, Some("csrt")).unwrap();
+        assert_eq!(csrt.sequences, [("a".to_owned(), 0.6)]);
+        assert_eq!(csrt.mean, 0.6);
+        assert!(read_auc(&path, Some("kcf")).is_err());
+    }
+
+    #[test]
     fn mismatched_results_are_errors() {
         let one = [table(&[("a", 0.5)])];
         assert!(compare(&one, &one, 0.05).is_err());
