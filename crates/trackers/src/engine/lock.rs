@@ -39,15 +39,18 @@ impl ParticleTracker {
         let space = self.config.space;
         let gap = frame.saturating_sub(self.memory.last_locked() + 1);
         let (share, mut mean, mut velocity, uniform_area) = if gap == 0 {
-            // A priori the target is anywhere in the search window; the detection only
-            // proposes where. The jump keeps the last estimate's shape.
-            let area = self.appearance.as_ref()?.window_area();
+            // Locked: the abrupt-motion jump, when configured and there is a detection. A priori
+            // the target is anywhere in the search window; the detection only proposes where.
+            // The jump keeps the last estimate's shape.
+            if settings.detection_share <= 0.0 {
+                return None;
+            }
             self.detection?;
-            let at_rest = [0.0; STATE_SLOTS];
+            let area = self.appearance.as_ref()?.window_area();
             (
                 settings.detection_share,
                 self.last_state,
-                at_rest,
+                [0.0; STATE_SLOTS],
                 Some(area),
             )
         } else {
