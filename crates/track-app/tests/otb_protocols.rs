@@ -163,6 +163,20 @@ fn tre_and_sre_runs_start_where_the_peers_script_starts_them() {
             assert!(out.join(p).join(f).is_file(), "{p}/{f}");
         }
     }
+    // SRE's table says what the truth scores in each run's start convention: below 1 (a box
+    // shifted by a tenth of its width overlaps the truth at 0.82), and only under SRE.
+    let sre_md = std::fs::read_to_string(out.join("sre/otb.md")).unwrap();
+    let ceiling: f64 = sre_md
+        .split("scores a success AUC of ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no start-convention score in {sre_md}"));
+    assert!(ceiling > 0.5 && ceiling < 0.9, "{ceiling}");
+    for p in ["ope", "tre"] {
+        let md = std::fs::read_to_string(out.join(p).join("otb.md")).unwrap();
+        assert!(!md.contains("start convention"), "{p}");
+    }
     let index = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(index.contains("<h2>TRE</h2>") && index.contains("<h2>SRE</h2>"));
     assert!(index.matches("<svg").count() >= 3 * 4);

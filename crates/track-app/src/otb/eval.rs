@@ -11,8 +11,8 @@ use trackers::{Preset, TrackerConfig};
 use vision_core::BoundingBox;
 
 use super::{
-    Protocol, RunStart, SequenceScore, boxes_path, boxes_text, csv, markdown, mean_over_runs,
-    read_boxes, run_starts, set_means,
+    Protocol, RunStart, SequenceScore, boxes_path, boxes_text, csv, in_start_convention, markdown,
+    mean_over_runs, read_boxes, run_starts, set_means,
 };
 use crate::commands::eval::{OtbArgs, sequence_name};
 use crate::commands::run::progress_of;
@@ -176,6 +176,25 @@ fn track_run(
         metrics,
         seconds: Some(seconds),
     }))
+}
+
+/// The success AUC of the truth in each run's start convention ([`in_start_convention`]): the
+/// mean over each sequence's runs, then over sequences; `None` without a scored run.
+fn convention_ceiling(prepared: &[Prepared], pi: usize) -> Result<Option<f64>> {
+    let mut sequences = Vec::new();
+    for seq in prepared {
+        let mut runs = Vec::new();
+        for start in &seq.starts[pi] {
+            let boxes = in_start_convention(&seq.truth, start);
+            if let Some(m) = score_run(&boxes, &seq.truth, start.frame, None)? {
+                runs.push(m.success_auc);
+            }
+        }
+        if !runs.is_empty() {
+            sequences.push(runs.iter().sum::<f64>() / runs.len() as f64);
+        }
+    }
+    Ok((!sequences.is_empty()).then(|| sequences.iter().sum::<f64>() / sequences.len() as f64))
 }
 
 /// Runs `track eval otb`.
@@ -349,6 +368,17 @@ pub fn run(args: &OtbArgs) -> Result<()> {
     for (protocol, rows, _, charts) in &sections {
         let dir = out.join(protocol.name());
         let mut md = markdown(*protocol, rows);
+        let pi = protocols.iter().position(|p| p == protocol).unwrap_or(0);
+        if *protocol == Protocol::Sre
+            && let Some(ceiling) = convention_ceiling(&prepared, pi)?
+        {
+            md.push_str(&format!(
+                "\nThe truth in each run's start convention (its start box's shift and scale \
+                 carried along) scores a success AUC of {ceiling:.3} on these sequences: what a \
+                 tracker that followed the target exactly and kept the convention of the box it \
+                 is given would score.\n"
+            ));
+        }
         if step > 1 {
             md = format!(
                 "One frame in {step} of each sequence, from its first (`--frame-step {step}`): \

@@ -141,6 +141,41 @@ pub fn run_starts(truth: &[Option<BoundingBox>], protocol: Protocol) -> Vec<RunS
     }
 }
 
+/// The truth as a tracker that keeps the convention of the box it was given would report it: each
+/// labelled box after `start` with the start box's offset and scale against the truth at the
+/// start frame carried along (the centre moved by the same shares of the box's width and height,
+/// the size scaled by the same factors). Under OPE and TRE the start box is the truth and this is
+/// the truth; under SRE its score is what a tracker would score that followed the target exactly
+/// and reported it in the convention of the box it is given, as a user's tracker should. Frames
+/// up to the start, and all frames of a run whose start frame is unlabelled, are `None`.
+pub fn in_start_convention(
+    truth: &[Option<BoundingBox>],
+    start: &RunStart,
+) -> Vec<Option<BoundingBox>> {
+    let Some(reference) = truth.get(start.frame).copied().flatten() else {
+        return vec![None; truth.len()];
+    };
+    let (rx, ry) = reference.centre();
+    let (sx, sy) = start.init.centre();
+    let (dx, dy) = ((sx - rx) / reference.w, (sy - ry) / reference.h);
+    let (kw, kh) = (start.init.w / reference.w, start.init.h / reference.h);
+    truth
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let b = b.filter(|_| i > start.frame)?;
+            let (cx, cy) = b.centre();
+            let (w, h) = (kw * b.w, kh * b.h);
+            Some(BoundingBox::new(
+                cx + dx * b.w - 0.5 * w,
+                cy + dy * b.h - 0.5 * h,
+                w,
+                h,
+            ))
+        })
+        .collect()
+}
+
 /// The file of run `run` of `tracker` on `sequence` under `protocol`, below `dir`:
 /// `dir/<protocol>/<tracker>/<sequence>[.<run>].txt`, without the run under OPE.
 pub fn boxes_path(
@@ -464,6 +499,41 @@ mod tests {
         let one = [None, b(0.0, 0.0, 4.0, 4.0), None];
         assert!(run_starts(&one, Protocol::Tre).is_empty());
         assert_eq!(run_starts(&one, Protocol::Sre).len(), 12);
+    }
+
+    #[test]
+    fn the_start_convention_carries_the_start_box_s_shift_and_scale() {
+        let truth = vec![
+            Some(BoundingBox::new(10.0, 20.0, 40.0, 50.0)),
+            None,
+            Some(BoundingBox::new(30.0, 20.0, 80.0, 100.0)),
+        ];
+        let runs = run_starts(&truth, Protocol::Sre);
+        // Run 1 is shifted right by a tenth of the width: 8 px on a box twice as wide.
+        let shifted = in_start_convention(&truth, &runs[1]);
+        assert_eq!(shifted[0], None);
+        assert_eq!(shifted[1], None);
+        let b = shifted[2].unwrap();
+        assert!(
+            (b.x - 38.0).abs() < 1e-9 && (b.y - 20.0).abs() < 1e-9,
+            "{b:?}"
+        );
+        assert!(
+            (b.w - 80.0).abs() < 1e-9 && (b.h - 100.0).abs() < 1e-9,
+            "{b:?}"
+        );
+        // Run 8 is scaled by 0.8 about the centre.
+        let b = in_start_convention(&truth, &runs[8])[2].unwrap();
+        assert!(
+            (b.w - 64.0).abs() < 1e-9 && (b.h - 80.0).abs() < 1e-9,
+            "{b:?}"
+        );
+        assert!((b.centre().0 - 70.0).abs() < 1e-9 && (b.centre().1 - 70.0).abs() < 1e-9);
+        // OPE's start is the truth: the truth comes back after the start frame.
+        let ope = run_starts(&truth, Protocol::Ope);
+        let same = in_start_convention(&truth, &ope[0]);
+        assert_eq!(same[2], truth[2]);
+        assert_eq!(same[0], None);
     }
 
     #[test]
