@@ -365,10 +365,9 @@ pub fn run(args: &OtbArgs) -> Result<()> {
         sections.push((protocol, rows, means, charts));
     }
     let mut printed = String::new();
-    for (protocol, rows, _, charts) in &sections {
+    for (pi, (protocol, rows, _, charts)) in sections.iter().enumerate() {
         let dir = out.join(protocol.name());
         let mut md = markdown(*protocol, rows);
-        let pi = protocols.iter().position(|p| p == protocol).unwrap_or(0);
         if *protocol == Protocol::Sre
             && let Some(ceiling) = convention_ceiling(&prepared, pi)?
         {
