@@ -179,6 +179,7 @@ fn tre_and_sre_runs_start_where_the_peers_script_starts_them() {
     }
     let index = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(index.contains("<h2>TRE</h2>") && index.contains("<h2>SRE</h2>"));
+    assert!(index.contains(&format!("scores a success AUC of {ceiling:.3}")));
     assert!(index.matches("<svg").count() >= 3 * 4);
 }
 

@@ -11,8 +11,8 @@ use trackers::{Preset, TrackerConfig};
 use vision_core::BoundingBox;
 
 use super::{
-    Protocol, RunStart, SequenceScore, boxes_path, boxes_text, csv, in_start_convention, markdown,
-    mean_over_runs, read_boxes, run_starts, set_means,
+    Protocol, RunStart, SequenceScore, boxes_path, boxes_text, ceiling_sentence, csv,
+    in_start_convention, markdown, mean_over_runs, read_boxes, run_starts, set_means,
 };
 use crate::commands::eval::{OtbArgs, sequence_name};
 use crate::commands::run::progress_of;
@@ -362,21 +362,19 @@ pub fn run(args: &OtbArgs) -> Result<()> {
         }
         let means = set_means(&rows);
         let charts = super::plots::protocol_charts(protocol, &rows, &means)?;
-        sections.push((protocol, rows, means, charts));
+        let ceiling = if protocol == Protocol::Sre {
+            convention_ceiling(&prepared, pi)?
+        } else {
+            None
+        };
+        sections.push((protocol, rows, means, charts, ceiling));
     }
     let mut printed = String::new();
-    for (pi, (protocol, rows, _, charts)) in sections.iter().enumerate() {
+    for (protocol, rows, _, charts, ceiling) in &sections {
         let dir = out.join(protocol.name());
         let mut md = markdown(*protocol, rows);
-        if *protocol == Protocol::Sre
-            && let Some(ceiling) = convention_ceiling(&prepared, pi)?
-        {
-            md.push_str(&format!(
-                "\nThe truth in each run's start convention (its start box's shift and scale \
-                 carried along) scores a success AUC of {ceiling:.3} on these sequences: what a \
-                 tracker that followed the target exactly and kept the convention of the box it \
-                 is given would score.\n"
-            ));
+        if let Some(c) = ceiling {
+            md.push_str(&format!("\n{}\n", ceiling_sentence(*c)));
         }
         if step > 1 {
             md = format!(
@@ -394,11 +392,12 @@ pub fn run(args: &OtbArgs) -> Result<()> {
     let page_sections: Vec<super::page::ProtocolSection<'_>> = sections
         .iter()
         .map(
-            |(protocol, rows, means, charts)| super::page::ProtocolSection {
+            |(protocol, rows, means, charts, ceiling)| super::page::ProtocolSection {
                 protocol: *protocol,
                 rows,
                 means,
                 charts,
+                ceiling: *ceiling,
             },
         )
         .collect();

@@ -176,6 +176,16 @@ pub fn in_start_convention(
         .collect()
 }
 
+/// The sentence under an SRE table that gives the success AUC `ceiling` of the truth in each
+/// run's start convention ([`in_start_convention`]).
+pub fn ceiling_sentence(ceiling: f64) -> String {
+    format!(
+        "The truth in each run's start convention (its start box's shift and scale carried \
+         along) scores a success AUC of {ceiling:.3} on these sequences: what a tracker that \
+         followed the target exactly and kept the convention of the box it is given would score."
+    )
+}
+
 /// The file of run `run` of `tracker` on `sequence` under `protocol`, below `dir`:
 /// `dir/<protocol>/<tracker>/<sequence>[.<run>].txt`, without the run under OPE.
 pub fn boxes_path(

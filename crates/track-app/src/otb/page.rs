@@ -21,6 +21,9 @@ pub struct ProtocolSection<'a> {
     /// The charts: the two over the set first, then two per sequence
     /// ([`super::plots::protocol_charts`]).
     pub charts: &'a [Chart],
+    /// SRE's ceiling, the success AUC of the truth in each run's start convention
+    /// ([`super::in_start_convention`]); `None` under the other protocols.
+    pub ceiling: Option<f64>,
 }
 
 fn opt(v: Option<f64>, decimals: usize) -> String {
@@ -64,7 +67,11 @@ pub fn render(command: &str, sections: &[ProtocolSection<'_>]) -> String {
                 opt(m.metrics.lost_auc, 3)
             );
         }
-        h.push_str("</table>\n<div class=\"strip\">\n");
+        h.push_str("</table>\n");
+        if let Some(c) = s.ceiling {
+            let _ = writeln!(h, "<p>{}</p>", escape(&super::ceiling_sentence(c)));
+        }
+        h.push_str("<div class=\"strip\">\n");
         for c in s.charts.iter().take(2) {
             let _ = writeln!(h, "<div class=\"plot\">{}</div>", c.svg);
         }
@@ -136,12 +143,22 @@ mod tests {
             rows: &rows,
             means: &means,
             charts: &charts,
+            ceiling: None,
         };
-        let html = render("track eval otb a<b c", &[section]);
+        let html = render("track eval otb a<b c", std::slice::from_ref(&section));
         assert!(html.contains("<h2>TRE</h2>"));
         assert!(html.contains("a&lt;b") && html.contains("x&amp;y"));
         assert!(!html.contains("<th>a<b</th>"));
         assert_eq!(html.matches("<svg").count(), charts.len());
         assert!(html.contains("href=\"tre/otb.md\""));
+        // SRE's ceiling is said when it is given, and only then.
+        assert!(!html.contains("start convention"));
+        let sre = ProtocolSection {
+            protocol: Protocol::Sre,
+            ceiling: Some(0.734),
+            ..section
+        };
+        let html = render("track eval otb", &[sre]);
+        assert!(html.contains("scores a success AUC of 0.734"));
     }
 }
