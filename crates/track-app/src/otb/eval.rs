@@ -17,7 +17,7 @@ use super::{
 use crate::commands::eval::{OtbArgs, sequence_name};
 use crate::commands::run::progress_of;
 use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
-use crate::metrics::{SequenceMetrics, score_run, with_self_evaluation};
+use crate::metrics::{SequenceMetrics, mean_metrics, score_run, with_self_evaluation};
 use crate::output::{OutputFolder, write_atomic};
 use crate::sequence::{Frame, FrameSource, open_sequence, read_every};
 use crate::session::Session;
@@ -178,23 +178,20 @@ fn track_run(
     }))
 }
 
-/// The success AUC of the truth in each run's start convention ([`in_start_convention`]): the
-/// mean over each sequence's runs, then over sequences; `None` without a scored run.
+/// The success AUC of the truth in each run's start convention ([`in_start_convention`]),
+/// averaged as the tables average a tracker's runs ([`mean_metrics`]: over each sequence's runs,
+/// then over sequences); `None` without a scored run.
 fn convention_ceiling(prepared: &[Prepared], pi: usize) -> Result<Option<f64>> {
     let mut sequences = Vec::new();
     for seq in prepared {
         let mut runs = Vec::new();
         for start in &seq.starts[pi] {
             let boxes = in_start_convention(&seq.truth, start);
-            if let Some(m) = score_run(&boxes, &seq.truth, start.frame, None)? {
-                runs.push(m.success_auc);
-            }
+            runs.extend(score_run(&boxes, &seq.truth, start.frame, None)?);
         }
-        if !runs.is_empty() {
-            sequences.push(runs.iter().sum::<f64>() / runs.len() as f64);
-        }
+        sequences.extend(mean_metrics(&runs));
     }
-    Ok((!sequences.is_empty()).then(|| sequences.iter().sum::<f64>() / sequences.len() as f64))
+    Ok(mean_metrics(&sequences).map(|m| m.success_auc))
 }
 
 /// Runs `track eval otb`.
