@@ -1,5 +1,7 @@
 //! `cargo xtask`: project automation. Thin by design: generation logic lives in library crates.
 
+mod camera_zoom;
+
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -19,6 +21,10 @@ enum Command {
     /// Write a synthetic clutter sequence with full ground truth (OTB layout + groundtruth.csv +
     /// scene.json).
     GenClutter(GenClutter),
+    /// Lay a known camera zoom over OTB folders of real footage: each frame cropped about a point
+    /// that follows the labelled target and resized back, the ground truth mapped alike, written
+    /// as OTB folders (`OUT/<sequence>`: img/, groundtruth_rect.txt, camera_zoom.csv and .json).
+    CameraZoom(camera_zoom::CameraZoomArgs),
 }
 
 /// Arguments of `gen-clutter`.
@@ -117,6 +123,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::GenClutter(args) => gen_clutter(args),
+        Command::CameraZoom(args) => camera_zoom::run(args, |line| println!("{line}")),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

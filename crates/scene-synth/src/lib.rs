@@ -12,6 +12,9 @@
 //! - `zoom`: abrupt ±20–30 % scale changes and "head turns" where the interior texture slides
 //!   while the outline stays (O Fig. 8).
 //!
+//! [`camera_zoom`] lays a known camera zoom over real footage instead: each frame cropped about a
+//! point that follows the labelled target and resized back, the ground truth mapped alike.
+//!
 //! The target is an ellipse with a smooth random interior texture and an outline whose contrast
 //! dips in low-contrast stretches. Clutter density is calibrated with the workspace's default
 //! 1-D edge detector ([`edges`]). Every frame comes with a [`FrameTruth`]: ellipse, Odobez's
@@ -35,6 +38,7 @@
 )]
 
 pub mod background;
+pub mod camera_zoom;
 pub mod edges;
 mod error;
 pub mod geometry;
