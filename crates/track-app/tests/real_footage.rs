@@ -113,11 +113,16 @@ fn head_holds_faceocc1_through_the_book_and_its_p_lost_says_when_it_is_covered()
             mean(&overlap, 2, 500) >= 0.6,
             "seed {seed}: lost before the book"
         );
-        // P(lost) rises while the face is covered and falls back once it is visible again.
+        // P(lost) rises while the face is covered, by more than an order of magnitude above
+        // its peak on the uncovered frames before and after the book, and falls back once the
+        // face is visible again. (Until stop 39 the bar was an absolute peak while covered;
+        // docs/RESULTS.md gives the figures before and after the motion proposal.)
+        let uncovered = peak(2, 500).max(peak(601, n));
         assert!(
-            peak(501, 600) > 0.2 && peak(601, n) < 0.1,
-            "seed {seed}: P(lost) peaks at {:.3} while covered and {:.3} after",
+            peak(501, 600) > 10.0 * uncovered && peak(601, n) < 0.1,
+            "seed {seed}: P(lost) peaks at {:.3} while covered, {:.3} before and {:.3} after",
             peak(501, 600),
+            peak(2, 500),
             peak(601, n)
         );
     }

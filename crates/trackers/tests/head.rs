@@ -326,8 +326,12 @@ fn particles_diagnostics_and_tempering_are_reported() {
     for seed in [1, 2, 3] {
         // Tempered (an opt-in piece of the engine): the ESS stays at its floor of 0.3 N though
         // the template is sharp, and the exponent says how much the likelihood was flattened.
+        // Drawn from the prior, so that the conditional ESS the floor holds is the weights' ESS
+        // (under the motion proposal the weights also carry prior over proposal).
         let mut tempered = Preset::Head.config(120, seed);
         tempered.filter.min_ess_fraction = Some(0.3);
+        tempered.proposal = trackers::ProposalKind::Prior;
+        tempered.motion = trackers::MotionSettings::default();
         let (_, t) = first_update(tempered);
         let d = t.diagnostics.expect("the engine reports its diagnostics");
         assert!(

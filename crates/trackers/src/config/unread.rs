@@ -146,7 +146,7 @@ mod tests {
 
     #[test]
     fn unread_settings_away_from_their_defaults_are_refused_by_name() {
-        let mut c = Preset::Head.config(50, 1);
+        let mut c = Preset::M1.config(50, 1);
         c.motion.warm_start = false;
         let (name, reason) = refused_as(&c);
         assert_eq!(name, "motion.warm_start");
