@@ -10,8 +10,8 @@ use image::ImageEncoder;
 use scene_synth::camera_zoom::{CameraZoom, Operator};
 use serde::Serialize;
 use track_app::groundtruth::{check_groundtruth_len, load_groundtruth};
+use track_app::otb::boxes_text;
 use track_app::sequence::{ImageFolder, decode_image};
-use vision_core::BoundingBox;
 
 /// The share of the frame's width and height the largest labelled box may fill at the zoom's
 /// peak: the largest zoom is lowered per sequence to keep it (a target larger than the crop
@@ -86,14 +86,19 @@ pub fn run(args: &CameraZoomArgs, mut report: impl FnMut(&str)) -> Result<(), St
         }
         names.push(name);
     }
-    for seq in &args.sequences {
-        report(&zoom_sequence(seq, zoom, &args.out)?);
+    for (seq, name) in args.sequences.iter().zip(names) {
+        report(&zoom_sequence(seq, name, zoom, &args.out)?);
     }
     Ok(())
 }
 
 /// One sequence: its frames cropped and resized, its truth mapped, into `out/<name>`.
-fn zoom_sequence(seq: &Path, zoom: CameraZoom, out: &Path) -> Result<String, String> {
+fn zoom_sequence(
+    seq: &Path,
+    name: &std::ffi::OsStr,
+    zoom: CameraZoom,
+    out: &Path,
+) -> Result<String, String> {
     let folder = ImageFolder::open(&seq.join("img")).map_err(|e| e.to_string())?;
     let gt_path = seq.join("groundtruth_rect.txt");
     let truth = load_groundtruth(&gt_path).map_err(|e| e.to_string())?;
@@ -103,9 +108,6 @@ fn zoom_sequence(seq: &Path, zoom: CameraZoom, out: &Path) -> Result<String, Str
         .iter()
         .flatten()
         .fold((0.0_f64, 0.0_f64), |(w, h), b| (w.max(b.w), h.max(b.h)));
-    let name = seq
-        .file_name()
-        .ok_or_else(|| format!("{}: not a folder name", seq.display()))?;
     let tmp = tempfile::Builder::new()
         .prefix(".camera-zoom-")
         .tempdir_in(out)
@@ -120,7 +122,7 @@ fn zoom_sequence(seq: &Path, zoom: CameraZoom, out: &Path) -> Result<String, Str
     let fitted = zoom.fitted(largest, size, FILL);
     let mut operator =
         Operator::new(fitted, size).map_err(|e| format!("{}: {e}", seq.display()))?;
-    let mut rect = String::new();
+    let mut mapped = Vec::with_capacity(truth.len());
     let mut crops = String::from("frame,zoom_x,zoom_y,crop_x,crop_y,crop_w,crop_h\n");
     for (k, (path, target)) in paths.iter().zip(&truth).enumerate() {
         let frame = decode_image(path).map_err(|e| e.to_string())?.to_rgb8();
@@ -137,11 +139,7 @@ fn zoom_sequence(seq: &Path, zoom: CameraZoom, out: &Path) -> Result<String, Str
         let crop = operator.next_crop(target.as_ref());
         let zoomed = crop.apply(&frame).map_err(|e| e.to_string())?;
         write_frame(&img_dir, path, &zoomed)?;
-        rect.push_str(&match target {
-            Some(b) => box_line(&crop.map_box(b)),
-            None => "0,0,0,0".to_owned(),
-        });
-        rect.push('\n');
+        mapped.push(target.as_ref().map(|b| crop.map_box(b)));
         let (zx, zy) = crop.zoom();
         crops.push_str(&format!(
             "{},{zx:.4},{zy:.4},{},{},{},{}\n",
@@ -152,7 +150,10 @@ fn zoom_sequence(seq: &Path, zoom: CameraZoom, out: &Path) -> Result<String, Str
             crop.h
         ));
     }
-    write(&tmp.path().join("groundtruth_rect.txt"), rect.as_bytes())?;
+    write(
+        &tmp.path().join("groundtruth_rect.txt"),
+        boxes_text(&mapped).as_bytes(),
+    )?;
     write(&tmp.path().join("camera_zoom.csv"), crops.as_bytes())?;
     let record = ZoomRecord {
         generator: "cargo xtask camera-zoom",
@@ -161,7 +162,7 @@ fn zoom_sequence(seq: &Path, zoom: CameraZoom, out: &Path) -> Result<String, Str
         fill: FILL,
         zoom: fitted,
         frames: paths.len(),
-        box_convention: "x,y = top-left corner, pixel (i, j) centred at (i, j), 0-based",
+        box_convention: scene_synth::BOX_CONVENTION,
     };
     let json = serde_json::to_string_pretty(&record).map_err(|e| e.to_string())?;
     write(
@@ -188,11 +189,6 @@ fn zoom_sequence(seq: &Path, zoom: CameraZoom, out: &Path) -> Result<String, Str
         zoom.period,
         dest.display()
     ))
-}
-
-/// A box as OTB ground truth writes it, two decimals (as `track run` and `opencv_peers.py`).
-fn box_line(b: &BoundingBox) -> String {
-    format!("{:.2},{:.2},{:.2},{:.2}", b.x, b.y, b.w, b.h)
 }
 
 /// A zoomed frame, named as its source: PNG from PNG footage, JPEG (quality 95) otherwise.
@@ -255,6 +251,20 @@ mod tests {
         fs::write(dir.join("groundtruth_rect.txt"), gt).unwrap();
     }
 
+    /// A temporary folder holding an OTB folder `name` (see [`otb_folder`]), and the output
+    /// folder's path beside it.
+    fn fixture(
+        name: &str,
+        frames: usize,
+        truth_lines: usize,
+    ) -> (tempfile::TempDir, PathBuf, PathBuf) {
+        let tmp = tempfile::tempdir().unwrap();
+        let seq = tmp.path().join(name);
+        otb_folder(&seq, frames, truth_lines);
+        let out = tmp.path().join("zoomed");
+        (tmp, seq, out)
+    }
+
     fn args(seq: PathBuf, out: PathBuf) -> CameraZoomArgs {
         CameraZoomArgs {
             sequences: vec![seq],
@@ -267,10 +277,7 @@ mod tests {
 
     #[test]
     fn a_zoomed_sequence_is_an_otb_folder_whose_truth_follows_the_zoom() {
-        let tmp = tempfile::tempdir().unwrap();
-        let seq = tmp.path().join("square");
-        otb_folder(&seq, 9, 9);
-        let out = tmp.path().join("zoomed");
+        let (_tmp, seq, out) = fixture("square", 9, 9);
         let mut lines = Vec::new();
         run(&args(seq, out.clone()), |l| lines.push(l.to_owned())).unwrap();
         assert_eq!(lines.len(), 1);
@@ -305,10 +312,7 @@ mod tests {
 
     #[test]
     fn bad_settings_and_inconsistent_inputs_are_refused_with_nothing_written() {
-        let tmp = tempfile::tempdir().unwrap();
-        let seq = tmp.path().join("short");
-        otb_folder(&seq, 4, 3);
-        let out = tmp.path().join("zoomed");
+        let (_tmp, seq, out) = fixture("short", 4, 3);
         let mut a = args(seq.clone(), out.clone());
         a.max_zoom = 0.5;
         assert!(run(&a, |_| ()).unwrap_err().contains("max_zoom"));

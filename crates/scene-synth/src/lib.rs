@@ -63,4 +63,4 @@ pub use params::{
 };
 pub use render::{Scene, to_f32};
 pub use truth::FrameTruth;
-pub use writer::write_sequence;
+pub use writer::{BOX_CONVENTION, write_sequence};

@@ -43,6 +43,9 @@ struct SceneRecord<'a> {
     box_convention: &'static str,
 }
 
+/// How the boxes of a written sequence are to be read, as its record files state it.
+pub const BOX_CONVENTION: &str = "x,y = top-left corner, pixel (i, j) centred at (i, j), 0-based";
+
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
     move |source| Error::Io {
         path: path.to_path_buf(),
@@ -103,7 +106,7 @@ pub fn write_sequence(dir: &Path, scene: &Scene) -> Result<usize> {
             })
             .collect(),
         occluder_rect: scene.occluder_rect(),
-        box_convention: "x,y = top-left corner, pixel (i, j) centred at (i, j), 0-based",
+        box_convention: BOX_CONVENTION,
     };
     let mut json = serde_json::to_string_pretty(&record)?;
     json.push('\n');
