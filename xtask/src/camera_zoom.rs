@@ -3,14 +3,14 @@
 //! `opencv_peers.py` alike.
 
 use std::fs;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
-use image::ImageEncoder;
 use scene_synth::camera_zoom::{CameraZoom, Operator};
 use serde::Serialize;
 use track_app::groundtruth::{check_groundtruth_len, load_groundtruth};
 use track_app::otb::boxes_text;
+use track_app::output::write_atomic;
+use track_app::render::{encode_jpeg, encode_png};
 use track_app::sequence::{ImageFolder, decode_image};
 
 /// The share of the frame's width and height the largest labelled box may fill at the zoom's
@@ -202,27 +202,17 @@ fn write_frame(dir: &Path, source: &Path, frame: &image::RgbImage) -> Result<(),
     let path = dir
         .join(stem)
         .with_extension(if png { "png" } else { "jpg" });
-    let file = fs::File::create(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut writer = BufWriter::new(file);
-    let (w, h) = frame.dimensions();
-    let result =
-        if png {
-            image::codecs::png::PngEncoder::new(&mut writer).write_image(
-                frame.as_raw(),
-                w,
-                h,
-                image::ExtendedColorType::Rgb8,
-            )
-        } else {
-            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut writer, JPEG_QUALITY)
-                .write_image(frame.as_raw(), w, h, image::ExtendedColorType::Rgb8)
-        };
-    result.map_err(|e| format!("cannot encode {}: {e}", path.display()))?;
-    std::io::Write::flush(&mut writer).map_err(|e| format!("{}: {e}", path.display()))
+    let bytes = if png {
+        encode_png(frame)
+    } else {
+        encode_jpeg(frame, JPEG_QUALITY)
+    }
+    .map_err(|e| format!("{}: {e}", path.display()))?;
+    write(&path, &bytes)
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    write_atomic(path, bytes).map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

@@ -168,12 +168,12 @@ impl Crop {
                 got: (frame.width() as usize) * (frame.height() as usize),
             });
         }
-        let sub = imageops::crop_imm(frame, self.x, self.y, self.w, self.h).to_image();
+        let sub = imageops::crop_imm(frame, self.x, self.y, self.w, self.h);
         if (self.w, self.h) == (self.out_w, self.out_h) {
-            return Ok(sub);
+            return Ok(sub.to_image());
         }
         Ok(imageops::resize(
-            &sub,
+            &*sub,
             self.out_w,
             self.out_h,
             FilterType::Triangle,

@@ -415,6 +415,23 @@ pub fn encode_png(img: &RgbImage) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// Encodes an RGB image as JPEG bytes at `quality` (1–100).
+///
+/// # Errors
+/// [`AppError::Computation`] when encoding fails.
+pub fn encode_jpeg(img: &RgbImage, quality: u8) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    JpegEncoder::new_with_quality(&mut bytes, quality)
+        .write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| AppError::computation("JPEG encoding", e))?;
+    Ok(bytes)
+}
+
 /// Writes `img` as a PNG file atomically.
 ///
 /// # Errors
@@ -454,18 +471,7 @@ impl OverlayFormat {
     pub fn encode(self, img: &RgbImage) -> Result<Vec<u8>> {
         match self {
             OverlayFormat::Png => encode_png(img),
-            OverlayFormat::Jpeg => {
-                let mut bytes = Vec::new();
-                JpegEncoder::new_with_quality(&mut bytes, JPEG_QUALITY)
-                    .write_image(
-                        img.as_raw(),
-                        img.width(),
-                        img.height(),
-                        ExtendedColorType::Rgb8,
-                    )
-                    .map_err(|e| AppError::computation("JPEG encoding", e))?;
-                Ok(bytes)
-            }
+            OverlayFormat::Jpeg => encode_jpeg(img, JPEG_QUALITY),
         }
     }
 
