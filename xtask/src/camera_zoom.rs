@@ -2,14 +2,13 @@
 //! them (`scene_synth::camera_zoom`), written as OTB folders for `track eval otb` and
 //! `opencv_peers.py` alike.
 
-use std::fs;
 use std::path::{Path, PathBuf};
 
 use scene_synth::camera_zoom::{CameraZoom, Operator};
 use serde::Serialize;
 use track_app::groundtruth::{check_groundtruth_len, load_groundtruth};
 use track_app::otb::boxes_text;
-use track_app::output::write_atomic;
+use track_app::output::{OutputGuard, write_atomic};
 use track_app::render::{encode_jpeg, encode_png};
 use track_app::sequence::{ImageFolder, decode_image};
 
@@ -40,8 +39,9 @@ pub struct CameraZoomArgs {
     /// frame, in (0, 1] (1 centres every frame on the target).
     #[arg(long, default_value_t = CameraZoom::DEFAULT_FOLLOW)]
     pub follow: f64,
-    /// Output folder: one OTB folder per sequence, `OUT/<sequence's folder name>`, replaced
-    /// whole if it exists.
+    /// Output folder: one OTB folder per sequence, `OUT/<sequence's folder name>`. What an
+    /// earlier run wrote there is replaced; no other file is touched, and no folder inside a
+    /// sequence is accepted.
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -62,8 +62,10 @@ struct ZoomRecord<'a> {
 ///
 /// # Errors
 /// A message naming the sequence and the file for a bad setting, an unreadable or inconsistent
-/// input, or an output that cannot be written. Each sequence is written to a temporary folder
-/// and renamed into place once complete, so an interrupted run leaves no partial sequence.
+/// input, or an output that cannot be written (the output guard's refusals among them: an output
+/// folder inside or holding a sequence, a file of another origin in an output's place). Every
+/// file is written atomically and recorded in the output folder's manifest, so the partial
+/// sequence of an interrupted run is removed by the next run into the folder.
 pub fn run(args: &CameraZoomArgs, mut report: impl FnMut(&str)) -> Result<(), String> {
     let zoom = CameraZoom {
         max_zoom: args.max_zoom,
@@ -71,8 +73,6 @@ pub fn run(args: &CameraZoomArgs, mut report: impl FnMut(&str)) -> Result<(), St
         follow: args.follow,
     };
     zoom.validate().map_err(|e| e.to_string())?;
-    fs::create_dir_all(&args.out)
-        .map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
     let mut names: Vec<&std::ffi::OsStr> = Vec::new();
     for seq in &args.sequences {
         let name = seq
@@ -86,6 +86,9 @@ pub fn run(args: &CameraZoomArgs, mut report: impl FnMut(&str)) -> Result<(), St
         }
         names.push(name);
     }
+    let _folder = OutputGuard::new(&args.sequences)
+        .folder(&args.out)
+        .map_err(|e| e.to_string())?;
     for (seq, name) in args.sequences.iter().zip(names) {
         report(&zoom_sequence(seq, name, zoom, &args.out)?);
     }
@@ -108,12 +111,8 @@ fn zoom_sequence(
         .iter()
         .flatten()
         .fold((0.0_f64, 0.0_f64), |(w, h), b| (w.max(b.w), h.max(b.h)));
-    let tmp = tempfile::Builder::new()
-        .prefix(".camera-zoom-")
-        .tempdir_in(out)
-        .map_err(|e| format!("cannot create a folder in {}: {e}", out.display()))?;
-    let img_dir = tmp.path().join("img");
-    fs::create_dir(&img_dir).map_err(|e| format!("{}: {e}", img_dir.display()))?;
+    let dest = out.join(name);
+    let img_dir = dest.join("img");
 
     let first = paths
         .first()
@@ -151,10 +150,10 @@ fn zoom_sequence(
         ));
     }
     write(
-        &tmp.path().join("groundtruth_rect.txt"),
+        &dest.join("groundtruth_rect.txt"),
         boxes_text(&mapped).as_bytes(),
     )?;
-    write(&tmp.path().join("camera_zoom.csv"), crops.as_bytes())?;
+    write(&dest.join("camera_zoom.csv"), crops.as_bytes())?;
     let record = ZoomRecord {
         generator: "cargo xtask camera-zoom",
         source: seq,
@@ -166,20 +165,9 @@ fn zoom_sequence(
     };
     let json = serde_json::to_string_pretty(&record).map_err(|e| e.to_string())?;
     write(
-        &tmp.path().join("camera_zoom.json"),
+        &dest.join("camera_zoom.json"),
         format!("{json}\n").as_bytes(),
     )?;
-
-    let dest = out.join(name);
-    if dest.exists() {
-        fs::remove_dir_all(&dest).map_err(|e| format!("cannot replace {}: {e}", dest.display()))?;
-    }
-    let kept = tmp.keep();
-    fs::rename(&kept, &dest).map_err(|e| {
-        // Not left behind half-named: the temporary folder goes with the error.
-        let _ = fs::remove_dir_all(&kept);
-        format!("cannot move the sequence to {}: {e}", dest.display())
-    })?;
     Ok(format!(
         "{}: {} frames, zoom up to {:.2} (asked {}) every {} frames → {}",
         name.to_string_lossy(),
@@ -218,6 +206,7 @@ fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs;
 
     /// A small OTB folder: a bright square moving right on a dark textured background.
     fn otb_folder(dir: &Path, frames: usize, truth_lines: usize) {
@@ -296,8 +285,13 @@ mod tests {
         assert!(record.contains("\"max_zoom\": 2.0"), "{record}");
         let crops = fs::read_to_string(dest.join("camera_zoom.csv")).unwrap();
         assert_eq!(crops.lines().count(), 10);
-        // Nothing else is left in the output folder: no temporary folder.
-        assert_eq!(fs::read_dir(&out).unwrap().count(), 1);
+        // Nothing else is left in the output folder but its lock and manifest.
+        let mut names: Vec<String> = fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, [".track-lock", ".track-outputs", "square"]);
     }
 
     #[test]
@@ -308,10 +302,11 @@ mod tests {
         assert!(run(&a, |_| ()).unwrap_err().contains("max_zoom"));
         let err = run(&args(seq, out.clone()), |_| ()).unwrap_err();
         assert!(err.contains("3 ground-truth lines for 4 frames"), "{err}");
-        assert_eq!(
-            fs::read_dir(&out).unwrap().count(),
-            0,
-            "a partial sequence was left"
-        );
+        assert!(!out.exists(), "a partial sequence was left");
+        // An output folder inside the sequence is refused, and nothing is written there.
+        let (_tmp, seq, _) = fixture("square", 4, 4);
+        let err = run(&args(seq.clone(), seq.join("zoomed")), |_| ()).unwrap_err();
+        assert!(err.contains("inside the input folder"), "{err}");
+        assert!(!seq.join("zoomed").exists());
     }
 }

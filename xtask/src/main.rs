@@ -85,6 +85,35 @@ fn params_for(sc: Scenario, args: &GenClutter) -> Result<ScenarioParams, String>
     Ok(p)
 }
 
+/// Writes the sequence of `scene` into `dir` through track's output guard: what an earlier run
+/// wrote there is replaced, no other file is touched. The scene is written to a temporary
+/// folder first, then each file atomically into `dir`.
+fn write_guarded(dir: &std::path::Path, scene: &Scene) -> Result<usize, String> {
+    let _folder = track_app::output::OutputGuard::new::<&std::path::Path>([])
+        .folder(dir)
+        .map_err(|e| e.to_string())?;
+    let tmp = tempfile::tempdir().map_err(|e| e.to_string())?;
+    let n = write_sequence(tmp.path(), scene).map_err(|e| e.to_string())?;
+    copy_tree(tmp.path(), dir)?;
+    Ok(n)
+}
+
+/// Copies every file below `from` to the same place below `to`, atomically.
+fn copy_tree(from: &std::path::Path, to: &std::path::Path) -> Result<(), String> {
+    let entries = std::fs::read_dir(from).map_err(|e| format!("{}: {e}", from.display()))?;
+    for entry in entries {
+        let entry = entry.map_err(|e| format!("{}: {e}", from.display()))?;
+        let (src, dst) = (entry.path(), to.join(entry.file_name()));
+        if src.is_dir() {
+            copy_tree(&src, &dst)?;
+        } else {
+            let bytes = std::fs::read(&src).map_err(|e| format!("{}: {e}", src.display()))?;
+            track_app::output::write_atomic(&dst, &bytes).map_err(|e| e.to_string())?;
+        }
+    }
+    Ok(())
+}
+
 fn gen_clutter(args: &GenClutter) -> Result<(), String> {
     let jobs: Vec<(Scenario, PathBuf)> = if args.all {
         Scenario::ALL
@@ -101,7 +130,7 @@ fn gen_clutter(args: &GenClutter) -> Result<(), String> {
     for (sc, dir) in jobs {
         let p = params_for(sc, args)?;
         let scene = Scene::new(&p, args.seed).map_err(|e| format!("{sc}: {e}"))?;
-        let n = write_sequence(&dir, &scene).map_err(|e| format!("{sc}: {e}"))?;
+        let n = write_guarded(&dir, &scene).map_err(|e| format!("{sc}: {e}"))?;
         let dens: Vec<String> = scene
             .background()
             .regions

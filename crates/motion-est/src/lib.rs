@@ -48,7 +48,6 @@
 pub mod error;
 pub mod estimator;
 mod implicit;
-mod meat;
 pub mod model;
 mod occlusion;
 pub mod odobez;

@@ -17,6 +17,7 @@ pub mod metrics;
 pub mod otb;
 pub mod output;
 pub mod plots;
+pub mod progress;
 pub mod record;
 pub mod render;
 pub mod report;

@@ -2,6 +2,8 @@
 //!
 //! - Every file is written to a temporary sibling and renamed into place, so an interrupted run
 //!   leaves only complete files ([`write_atomic`], [`AtomicFile`]).
+//! - Every command gets its outputs from one guard ([`OutputGuard`]): never onto or into an input,
+//!   never over a file `track` did not write.
 //! - An output folder is owned by one command at a time, and `track` removes or replaces only
 //!   the files its manifest says it wrote there ([`OutputFolder`]).
 //! - A path that already exists must be a regular file: a FIFO, a symbolic link, a device node or
@@ -18,7 +20,9 @@ use std::path::{Path, PathBuf};
 use crate::{AppError, Result};
 
 mod folder;
+mod guard;
 pub use folder::{LOCK_NAME, MANIFEST_NAME, OutputFolder, TEMP_SUFFIX};
+pub use guard::{OutputFile, OutputGuard};
 
 /// The name used in messages for standard output.
 pub const STDOUT_NAME: &str = "standard output";

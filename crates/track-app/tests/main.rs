@@ -8,6 +8,7 @@ mod learn_switching;
 mod messages;
 mod motion_failures;
 mod otb_protocols;
+mod output_guard;
 mod outputs;
 mod real_footage;
 mod reliability;

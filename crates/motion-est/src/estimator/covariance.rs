@@ -1,9 +1,9 @@
 //! The sandwich covariance of the estimate (see the module documentation of [`super`]).
 
+use super::meat::Grid;
 use super::warp::cubic_weights;
 use super::workspace::{Span, map_bands};
 use super::{Mat7, Workspace};
-use crate::meat::Grid;
 use crate::model::{ModelSpec, MotionModel};
 use crate::pyramid::Level;
 use crate::robust::RobustFunction;
@@ -201,7 +201,7 @@ impl Workspace {
 
     /// Σ_s v(s) v(s)ᵀ with v = K ∗ U, U the vectors u scattered onto the noise samples they read:
     /// the pixel itself for the first frame, the interpolation taps around r + d(r) in the second
-    /// frame (`l1`). The grid's cells hold one lane per parameter (see [`crate::meat`]).
+    /// frame (`l1`). The grid's cells hold one lane per parameter (see `meat`).
     fn meat(&mut self, n: usize, presmooth: bool, l1: Option<&Level>) -> Mat7 {
         let pad = if presmooth { 2usize } else { 0 };
         // Tap offsets −1..=2 around (ix, iy) for the second frame.

@@ -36,6 +36,7 @@ mod covariance;
 mod estimate;
 mod fit;
 mod iterate;
+mod meat;
 mod normal;
 mod request;
 mod restarts;
@@ -58,8 +59,6 @@ pub use estimate::MotionEstimate;
 use request::Frames;
 pub use request::Request;
 pub use settings::Settings;
-pub(crate) use warp::cubic_weights;
-pub(crate) use workspace::Span;
 use workspace::{BAND_PIXELS, on_pool};
 pub use workspace::{FrameBuffers, Workspace};
 

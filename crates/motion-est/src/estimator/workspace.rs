@@ -1,7 +1,10 @@
 //! Per-estimate buffers, the region's row spans and their bands for concurrent work.
 
-use crate::meat::Cell;
 use crate::pyramid::Pyramid;
+
+/// One cell of the covariance's dense grid (see `meat`): the parameters' channels, unused lanes
+/// zero.
+pub(crate) type Cell = [f32; 8];
 
 /// Per-estimate scratch buffers. Reuse one across estimates to avoid allocation.
 #[derive(Debug, Clone, Default)]

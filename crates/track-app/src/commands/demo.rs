@@ -64,7 +64,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let config = preset.config(args.particles, args.seed);
     // The output folder is checked and locked before the work (crate::output::OutputFolder).
-    let _folder = crate::output::OutputFolder::open(&args.out, &[])?;
+    let _folder = crate::output::OutputGuard::new::<&std::path::Path>([]).folder(&args.out)?;
     let seq = SyntheticSequence::render(args.scenario.into(), None, args.seed, &[])?;
     let draw = DrawOptions {
         colour_by: args.colour_by,

@@ -8,15 +8,16 @@ use scene_synth::Scenario;
 use trackers::{Preset, SmootherSettings, TrackerConfig};
 use vision_core::BoundingBox;
 
-use crate::commands::run::{Overrides, progress, tracker_config};
+use crate::commands::run::{Overrides, tracker_config};
 use crate::evaluation::{
     SyntheticSequence, TABLE1_COLUMNS, TABLE1_TRACKERS, switching_csv, switching_markdown,
     switching_scores, table1, table1_csv, table1_markdown,
 };
 use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
 use crate::otb::Protocol;
-use crate::output::write_atomic;
-use crate::sequence::{FrameSource, open_sequence};
+use crate::output::{OutputGuard, write_atomic};
+use crate::progress::progress;
+use crate::sequence::FrameSource;
 use crate::session::Session;
 use crate::{AppError, Result};
 
@@ -313,6 +314,12 @@ pub fn run(args: &Args) -> Result<()> {
 /// `track eval paired`: prints (and with `--out` writes) the paired comparison per protocol.
 fn run_paired(args: &PairedArgs) -> Result<()> {
     use crate::otb::paired::{compare, csv_paths, markdown, read_auc};
+    // The report file is claimed before anything is read: never an input, never a file of the
+    // user's.
+    let out = match &args.out {
+        Some(path) => Some(OutputGuard::new(args.base.iter().chain(&args.variant)).file(path)?),
+        None => None,
+    };
     let protocols: Vec<Protocol> = if args.protocols.is_empty() {
         [Protocol::Ope, Protocol::Tre, Protocol::Sre]
             .into_iter()
@@ -346,8 +353,8 @@ fn run_paired(args: &PairedArgs) -> Result<()> {
         report.push_str(&markdown(protocol, &comparison, args.level));
         report.push('\n');
     }
-    if let Some(out) = &args.out {
-        write_atomic(out, report.as_bytes())?;
+    if let Some(out) = out {
+        out.write(report.as_bytes())?;
     }
     crate::output::println_stdout(report.trim_end())?;
     Ok(())
@@ -370,7 +377,7 @@ fn run_table1(args: &Table1Args) -> Result<()> {
         positive("--frames", *f)?;
     }
     let trackers = presets(trackers, &TABLE1_TRACKERS)?;
-    let _folder = crate::output::OutputFolder::open(out, &[])?;
+    let _folder = OutputGuard::new::<&Path>([]).folder(out)?;
     let seq = SyntheticSequence::render((*scenario).into(), *frames, *scene_seed, set)?;
     let bar = progress(
         (trackers.len() * TABLE1_COLUMNS.len()) as u64,
@@ -419,7 +426,7 @@ fn run_switching(args: &SwitchingArgs) -> Result<()> {
         &[Preset::WHmm, Preset::WOcc, Preset::WEval, Preset::Full],
         None,
     )?;
-    let _folder = crate::output::OutputFolder::open(out, &[])?;
+    let _folder = OutputGuard::new(configs).folder(out)?;
     let smoother = SmootherSettings::default();
     let mut rows = Vec::new();
     for scenario in [Scenario::Mclutter, Scenario::Occlusion] {
@@ -450,16 +457,27 @@ fn run_switching(args: &SwitchingArgs) -> Result<()> {
     Ok(())
 }
 
-/// `track eval otb`: see [`crate::otb::eval`].
+/// `track eval otb`: the trackers' configurations (head by default, unless `--results` gives
+/// the boxes to score), then [`crate::otb::eval::run`].
 fn run_otb(args: &OtbArgs) -> Result<()> {
-    crate::otb::eval::run(args)
-}
-
-/// The name of the sequence in folder `dir`: the folder's name.
-pub(crate) fn sequence_name(dir: &Path) -> String {
-    dir.file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| dir.display().to_string())
+    let default: &[Preset] = if args.results.is_empty() {
+        &[Preset::Head]
+    } else {
+        &[]
+    };
+    let configs = args
+        .run
+        .configs(&args.configs, default, args.edge_threshold)?;
+    crate::otb::eval::run(crate::otb::eval::Evaluation {
+        sequences: &args.sequences,
+        configs,
+        config_files: &args.configs,
+        protocols: &args.protocols,
+        results: &args.results,
+        frame_step: args.frame_step,
+        out: &args.out,
+        quiet: args.quiet,
+    })
 }
 
 /// Tracks one OTB folder with `config` from its first labelled box (the frames before it are
@@ -470,11 +488,7 @@ pub(crate) fn track_otb(
     config: &TrackerConfig,
     quiet: bool,
 ) -> Result<(Session, usize, Vec<Option<BoundingBox>>)> {
-    let spec = dir.to_string_lossy();
-    let mut sequence = open_sequence(&spec)?;
-    let gt_path = sequence.groundtruth.clone().ok_or_else(|| {
-        AppError::input(dir, "not an OTB folder: groundtruth_rect.txt is missing")
-    })?;
+    let (mut sequence, gt_path) = crate::otb::open_otb(dir)?;
     let info = sequence.source.validate_all()?;
     let truth = load_groundtruth(&gt_path)?;
     check_groundtruth_len(&truth, info.frames, &gt_path)?;

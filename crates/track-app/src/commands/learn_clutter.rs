@@ -67,10 +67,11 @@ pub fn run(args: &Args) -> Result<()> {
             format!("{} is more than the maximum, {MAX_K}", args.k),
         ));
     }
-    if let Some(path) = &args.out {
-        // Refused before the work, not after it.
-        crate::output::check_replaceable(path)?;
-    }
+    // Refused before the work, not after it.
+    let out = match &args.out {
+        Some(path) => Some(crate::output::OutputGuard::new(&args.images).file(path)?),
+        None => None,
+    };
     let settings = ClutterSettings {
         lines: args.lines,
         k: args.k,
@@ -105,8 +106,8 @@ pub fn run(args: &Args) -> Result<()> {
         .to_json()
         .map_err(|e| AppError::computation("serialising the clutter model", e))?;
     json.push('\n');
-    match &args.out {
-        Some(path) => crate::output::write_atomic(path, json.as_bytes()),
+    match out {
+        Some(file) => file.write(json.as_bytes()),
         None => crate::output::print_stdout(&json),
     }
 }

@@ -14,7 +14,6 @@ use trackers::{SmootherSettings, SwitchingStatistics, TrackerConfig};
 
 use crate::commands::eval::track_otb;
 use crate::commands::run::{DEFAULT_PARTICLES, DEFAULT_SEED, Overrides, tracker_config};
-use crate::output::write_atomic;
 use crate::{AppError, Result};
 
 /// Arguments of `track learn-switching`.
@@ -125,6 +124,9 @@ pub fn run(args: &Args) -> Result<()> {
             format!("{} has no switching process to learn", config.name),
         ));
     }
+    // Claimed before the work: never an input, never a file of the user's.
+    let inputs = args.sequences.iter().chain(args.config.as_ref());
+    let out = crate::output::OutputGuard::new(inputs).file(&args.out)?;
     crate::output::probe_dir(
         args.out
             .parent()
@@ -137,7 +139,7 @@ pub fn run(args: &Args) -> Result<()> {
     config.name = format!("{}-learnt", config.name);
     let json = serde_json::to_string_pretty(&config)
         .map_err(|e| AppError::computation("writing the configuration", e))?;
-    write_atomic(&args.out, json.as_bytes())?;
+    out.write(json.as_bytes())?;
     if !args.quiet {
         crate::output::println_stdout(&format!("wrote {}", args.out.display()))?;
     }

@@ -7,18 +7,18 @@
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
-use trackers::{Preset, TrackerConfig};
+use trackers::TrackerConfig;
 use vision_core::BoundingBox;
 
 use super::{
     Protocol, RunStart, SequenceScore, boxes_path, boxes_text, ceiling_sentence, csv,
-    in_start_convention, markdown, mean_over_runs, read_boxes, run_starts, set_means,
+    in_start_convention, markdown, mean_over_runs, read_boxes, run_starts, sequence_name,
+    set_means,
 };
-use crate::commands::eval::{OtbArgs, sequence_name};
-use crate::commands::run::progress_of;
 use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
 use crate::metrics::{SequenceMetrics, mean_metrics, score_run, with_self_evaluation};
-use crate::output::{OutputFolder, write_atomic};
+use crate::output::{OutputGuard, write_atomic};
+use crate::progress::progress_of;
 use crate::sequence::{Frame, FrameSource, open_sequence, read_every};
 use crate::session::Session;
 use crate::{AppError, Result};
@@ -89,10 +89,7 @@ fn parse_results(values: &[String]) -> Result<Vec<(String, PathBuf)>> {
 /// Reads a sequence's ground truth and frame count, checks its first box against the frame, keeps
 /// every `step`-th frame's line from the first, and lays out the runs of each protocol on those.
 fn prepare(dir: &Path, protocols: &[Protocol], step: usize) -> Result<Prepared> {
-    let sequence = open_sequence(&dir.to_string_lossy())?;
-    let gt_path = sequence.groundtruth.clone().ok_or_else(|| {
-        AppError::input(dir, "not an OTB folder: groundtruth_rect.txt is missing")
-    })?;
+    let (sequence, gt_path) = super::open_otb(dir)?;
     let info = sequence.source.validate_all()?;
     let truth = load_groundtruth(&gt_path)?;
     check_groundtruth_len(&truth, info.frames, &gt_path)?;
@@ -194,33 +191,47 @@ fn convention_ceiling(prepared: &[Prepared], pi: usize) -> Result<Option<f64>> {
     Ok(mean_metrics(&sequences).map(|m| m.success_auc))
 }
 
+/// What `track eval otb` evaluates: its command line with the trackers' configurations built
+/// (the command builds them, so that this module knows nothing of the command line).
+#[derive(Debug)]
+pub struct Evaluation<'a> {
+    /// OTB folders.
+    pub sequences: &'a [PathBuf],
+    /// The tracker runs, presets first, then configuration files.
+    pub configs: Vec<TrackerConfig>,
+    /// The configuration files read (inputs, which no output may touch).
+    pub config_files: &'a [PathBuf],
+    /// The protocols asked for (in any order, repeats allowed).
+    pub protocols: &'a [Protocol],
+    /// Other trackers' boxes, `NAME=DIR`.
+    pub results: &'a [String],
+    /// Track and score every K-th frame.
+    pub frame_step: u32,
+    /// The output folder.
+    pub out: &'a Path,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
 /// Runs `track eval otb`.
 ///
 /// # Errors
 /// See [`AppError`]: bad settings (exit 2), a bad sequence, ground truth or `--results` file
 /// (exit 3, naming it), an output that cannot be written (exit 4).
-pub fn run(args: &OtbArgs) -> Result<()> {
-    let OtbArgs {
+pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
+    let Evaluation {
         sequences,
-        run,
-        edge_threshold,
         configs,
+        config_files,
         protocols,
         results,
         frame_step,
         out,
         quiet,
-    } = args;
-    let step = *frame_step as usize;
+    } = evaluation;
+    let step = frame_step as usize;
     let results = parse_results(results)?;
-    // With --results alone, only those are scored: no tracker runs unless asked for.
-    let default: &[Preset] = if results.is_empty() {
-        &[Preset::Head]
-    } else {
-        &[]
-    };
-    let configs = run.configs(configs, default, *edge_threshold)?;
-    let mut protocols = protocols.clone();
+    let mut protocols = protocols.to_vec();
     protocols.sort();
     protocols.dedup();
     let mut names: Vec<&str> = Vec::new();
@@ -240,9 +251,17 @@ pub fn run(args: &OtbArgs) -> Result<()> {
     }
     let mut inputs: Vec<&Path> = sequences.iter().map(PathBuf::as_path).collect();
     inputs.extend(results.iter().map(|r| r.1.as_path()));
+    inputs.extend(config_files.iter().map(PathBuf::as_path));
     // Results are written after every run: an output folder that cannot be made, or is in use,
     // is found before that.
-    let _folder = OutputFolder::open(out, &inputs)?;
+    let folder = OutputGuard::new(inputs).folder(out)?;
+    // The tables and the page, checked now rather than after every run.
+    for p in &protocols {
+        for name in ["otb.md", "otb.csv"] {
+            folder.check_free(&Path::new(p.name()).join(name), None)?;
+        }
+    }
+    folder.check_free(Path::new("index.html"), None)?;
     let prepared: Vec<Prepared> = sequences
         .iter()
         .map(|d| prepare(d, &protocols, step))
@@ -286,7 +305,7 @@ pub fn run(args: &OtbArgs) -> Result<()> {
         .iter()
         .map(|s| s.starts.iter().map(Vec::len).sum::<usize>() * configs.len())
         .sum();
-    let bar = progress_of(total as u64, *quiet, "OTB", "runs");
+    let bar = progress_of(total as u64, quiet, "OTB", "runs");
     for (si, seq) in prepared.iter().enumerate() {
         bar.set_message(format!("OTB ({})", seq.name));
         let mut source = open_sequence(&seq.dir.to_string_lossy())?.source;

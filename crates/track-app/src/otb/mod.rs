@@ -410,6 +410,36 @@ pub fn markdown(protocol: Protocol, rows: &[SequenceScore]) -> String {
     s
 }
 
+/// Opens the OTB folder `dir` (`img/` and `groundtruth_rect.txt`); returns the sequence and its
+/// ground-truth file. A file given instead (`SEQ/groundtruth_rect.txt`, a video) is refused as
+/// not an OTB folder, before any decoder is asked to read it.
+///
+/// # Errors
+/// [`AppError::BadInput`] naming `dir`.
+pub(crate) fn open_otb(dir: &Path) -> Result<(crate::sequence::Sequence, PathBuf)> {
+    if !dir.is_dir() {
+        let reason = if dir.exists() {
+            "not an OTB folder but a file: give the folder that holds img/ and \
+             groundtruth_rect.txt"
+        } else {
+            "no such folder"
+        };
+        return Err(AppError::input(dir, reason));
+    }
+    let sequence = crate::sequence::open_sequence(&dir.to_string_lossy())?;
+    let gt_path = sequence.groundtruth.clone().ok_or_else(|| {
+        AppError::input(dir, "not an OTB folder: groundtruth_rect.txt is missing")
+    })?;
+    Ok((sequence, gt_path))
+}
+
+/// The name of the sequence in folder `dir`: the folder's name.
+pub(crate) fn sequence_name(dir: &Path) -> String {
+    dir.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| dir.display().to_string())
+}
+
 /// The sequences of `rows`, in the order of their first row.
 pub fn sequence_names(rows: &[SequenceScore]) -> Vec<String> {
     let mut names: Vec<String> = Vec::new();

@@ -18,7 +18,9 @@
 //!    does not list or leads through a symbolic link.
 //!
 //! The lock file and the manifest stay in the folder (removing a lock file races with the next
-//! command that takes it); they are the only files `track` keeps there besides its outputs.
+//! command that takes it); they are the only files `track` keeps there besides its outputs. A
+//! command that writes nothing there (refused, or failed before its first output) removes again
+//! the lock file, the manifest and the folders it created, so that a refusal changes nothing.
 
 use std::collections::HashSet;
 use std::fs::{File, OpenOptions};
@@ -42,6 +44,10 @@ pub struct OutputFolder {
     state: Arc<FolderState>,
     /// Held for the folder's lifetime: the exclusive lock.
     _lock: File,
+    /// What opening the folder created (the folder, its lock file, its manifest), removed again
+    /// when the command ends without writing anything there (refused, or failed before its
+    /// first output), so that a refusal leaves the user's folder as it was.
+    created: Vec<PathBuf>,
 }
 
 /// What the registry knows of an open folder.
@@ -57,7 +63,7 @@ struct FolderState {
 /// The open output folders of this process.
 static OPEN: Mutex<Vec<Arc<FolderState>>> = Mutex::new(Vec::new());
 
-fn write_error(path: &Path, message: impl Into<String>) -> AppError {
+pub(super) fn write_error(path: &Path, message: impl Into<String>) -> AppError {
     AppError::Write {
         path: path.to_path_buf(),
         source: std::io::Error::other(message.into()),
@@ -75,11 +81,15 @@ impl OutputFolder {
     /// Opens `dir` as the output folder of a command that reads `inputs` (see the module
     /// documentation for what it checks, locks and removes).
     ///
+    /// Commands open their folder through the output guard
+    /// ([`OutputGuard::folder`](super::OutputGuard::folder)), which checks it against every
+    /// input first.
+    ///
     /// # Errors
     /// [`AppError::Write`] (exit 4) naming the folder: a symbolic link, a file, a folder that is
     /// or contains an input, one in use by another `track` command, or one that cannot be
     /// written; or naming a recorded output that cannot be removed.
-    pub fn open(dir: &Path, inputs: &[&Path]) -> Result<Self> {
+    pub(super) fn open(dir: &Path, inputs: &[&Path]) -> Result<Self> {
         if std::fs::symlink_metadata(dir).is_ok_and(|m| m.file_type().is_symlink()) {
             return Err(write_error(
                 dir,
@@ -87,6 +97,16 @@ impl OutputFolder {
                  what track writes and removes is plain to see",
             ));
         }
+        // The folders that do not exist yet, outermost first, removed again if nothing is
+        // written.
+        let absolute = std::path::absolute(dir).map_err(io_error(dir))?;
+        let mut missing: Vec<PathBuf> = absolute
+            .ancestors()
+            .take_while(|a| std::fs::symlink_metadata(a).is_err())
+            .map(Path::to_path_buf)
+            .collect();
+        missing.reverse();
+        let mut cleanup = Cleanup(missing);
         super::probe_dir(dir)?;
         let canonical = dir.canonicalize().map_err(io_error(dir))?;
         for input in inputs {
@@ -104,8 +124,14 @@ impl OutputFolder {
                 ));
             }
         }
-        let lock = take_lock(dir)?;
+        let lock_path = dir.join(LOCK_NAME);
         let manifest_path = dir.join(MANIFEST_NAME);
+        for path in [&lock_path, &manifest_path] {
+            if std::fs::symlink_metadata(path).is_err() {
+                cleanup.0.push(path.clone());
+            }
+        }
+        let lock = take_lock(dir)?;
         remove_recorded(dir, &manifest_path)?;
         let manifest = OpenOptions::new()
             .create(true)
@@ -121,7 +147,11 @@ impl OutputFolder {
         OPEN.lock()
             .unwrap_or_else(PoisonError::into_inner)
             .push(Arc::clone(&state));
-        Ok(Self { state, _lock: lock })
+        Ok(Self {
+            state,
+            _lock: lock,
+            created: cleanup.defuse(),
+        })
     }
 
     /// The folder (absolute).
@@ -170,6 +200,49 @@ impl Drop for OutputFolder {
         OPEN.lock()
             .unwrap_or_else(PoisonError::into_inner)
             .retain(|s| !Arc::ptr_eq(s, &self.state));
+        let wrote_nothing = self
+            .state
+            .manifest
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .1
+            .is_empty();
+        if wrote_nothing {
+            remove_created(&self.created);
+        }
+    }
+}
+
+/// Removes what opening a folder created, newest first: files, then the folder if it is empty.
+/// The lock is still held while its file is removed, so no other command holds it.
+fn remove_created(created: &[PathBuf]) {
+    for path in created.iter().rev() {
+        match std::fs::symlink_metadata(path) {
+            Ok(m) if m.is_dir() => {
+                // Only when empty: remove_dir refuses a folder with anything in it.
+                let _ = std::fs::remove_dir(path);
+            }
+            Ok(m) if m.file_type().is_file() => {
+                let _ = std::fs::remove_file(path);
+            }
+            _ => {}
+        }
+    }
+}
+
+/// What an [`OutputFolder::open`] that fails part-way has created, removed on drop.
+struct Cleanup(Vec<PathBuf>);
+
+impl Cleanup {
+    /// Keeps what was created: the folder opened.
+    fn defuse(mut self) -> Vec<PathBuf> {
+        std::mem::take(&mut self.0)
+    }
+}
+
+impl Drop for Cleanup {
+    fn drop(&mut self) {
+        remove_created(&self.0);
     }
 }
 
@@ -317,6 +390,67 @@ fn check_not_foreign(path: &Path) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// Whether the manifest of the folder holding the file `path` lists it (a file `track` wrote).
+pub(super) fn is_listed(path: &Path) -> bool {
+    let (Some(dir), Some(name)) = (path.parent(), path.file_name()) else {
+        return false;
+    };
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    let manifest = dir.join(MANIFEST_NAME);
+    if !std::fs::symlink_metadata(&manifest).is_ok_and(|m| m.file_type().is_file()) {
+        return false;
+    }
+    std::fs::read(&manifest).is_ok_and(|text| {
+        String::from_utf8_lossy(&text)
+            .lines()
+            .any(|l| recorded_path(l).is_some_and(|p| p.as_os_str() == name))
+    })
+}
+
+/// Records the single output file `path` in the manifest of its folder (created when absent),
+/// unless it is listed already, before the file is written: the next command may then replace
+/// it, and a command that opens the folder as its output folder removes it.
+///
+/// # Errors
+/// [`AppError::Write`] naming the manifest.
+pub(super) fn record_single(path: &Path) -> Result<()> {
+    if is_listed(path) {
+        return Ok(());
+    }
+    let Some(name) = path.file_name() else {
+        return Err(write_error(path, "an output file needs a file name"));
+    };
+    let line = name.to_string_lossy();
+    if line.contains('\n') {
+        return Err(write_error(
+            path,
+            "an output name may not hold a line break",
+        ));
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    super::create_dir(dir)?;
+    let manifest_path = dir.join(MANIFEST_NAME);
+    if std::fs::symlink_metadata(&manifest_path).is_ok_and(|m| !m.file_type().is_file()) {
+        return Err(write_error(
+            &manifest_path,
+            "the manifest of track's outputs is not a regular file",
+        ));
+    }
+    OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&manifest_path)
+        .and_then(|mut f| f.write_all(format!("{line}\n").as_bytes()))
+        .map_err(io_error(&manifest_path))
 }
 
 /// Called before the output `path` (or its temporary sibling) is created: when `path` lies in an

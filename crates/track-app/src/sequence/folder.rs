@@ -54,7 +54,30 @@ impl ImageFolder {
             let entry =
                 entry.map_err(|e| AppError::input(folder, format!("cannot read folder: {e}")))?;
             let path = entry.path();
+            // macOS writes its metadata of `0001.jpg` as `._0001.jpg` on foreign disks: not a
+            // frame.
+            if entry.file_name().to_string_lossy().starts_with("._") {
+                continue;
+            }
             if !path.is_file() {
+                // A name of a frame that is no readable file (a symbolic link to nothing, a
+                // folder) is an error, not a gap: skipping it would shift every later frame.
+                if is_image_path(&path) {
+                    let what = match std::fs::symlink_metadata(&path) {
+                        Ok(m) if m.file_type().is_symlink() && !path.exists() => {
+                            "a symbolic link to nothing"
+                        }
+                        Ok(m) if m.is_dir() => "a folder",
+                        _ => "not a regular file",
+                    };
+                    return Err(AppError::input(
+                        &path,
+                        format!(
+                            "named as a frame but {what}; every frame must be a readable image \
+                             (remove or fix it)"
+                        ),
+                    ));
+                }
                 continue;
             }
             if is_image_path(&path) {

@@ -11,11 +11,10 @@
 //! fixed order) is the same on every instruction set, so the result does not depend on the
 //! machine's.
 
-use crate::estimator::{Mat7, Span, cubic_weights};
+use super::Mat7;
+use super::warp::cubic_weights;
+use super::workspace::{Cell, Span};
 use crate::pyramid::{KERNEL, Level};
-
-/// One grid cell: the parameters' channels, unused lanes zero.
-pub(crate) type Cell = [f32; 8];
 
 /// The grid of one frame: `bw`×`bh` cells with origin (`ox`, `oy`) in the level, onto which the
 /// per-pixel vectors `u` are scattered at `pos` (through the interpolation taps at fractions
