@@ -156,7 +156,12 @@ impl Session {
         .map_err(|e| AppError::input(&frame.name, e.to_string()))?;
         let failed = |e| AppError::computation(format!("tracking {}", frame.name), e);
         let estimate = if self.started {
-            self.tracker.update(view).map_err(failed)
+            self.tracker.update(view).map_err(|e| match e {
+                // A frame the tracker cannot read (a grey frame after a colour start): the
+                // input's fault, named by its file.
+                trackers::Error::BadFrame { reason, .. } => AppError::input(&frame.name, reason),
+                other => failed(other),
+            })
         } else {
             self.tracker.init(view, *init).map_err(|e| match e {
                 // The tracker cannot start from this box: a setting (exit 2), not a failure.

@@ -1,6 +1,7 @@
 //! The integration tests of this package, in one test binary (one binary per package keeps a
 //! cold build short: each test binary links the whole dependency tree).
 
+mod bad_inputs;
 mod common;
 mod config_files;
 mod golden;

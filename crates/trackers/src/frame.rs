@@ -392,6 +392,39 @@ mod tests {
     }
 
     #[test]
+    fn a_grey_frame_after_a_colour_start_is_refused_not_lost() {
+        let (w, h) = (96, 80);
+        let start = Ellipse::new(30.0, 40.0, 15.0, 15.0, 0.0);
+        let rgb = rgb_frame(w, h, 30.0);
+        let grey: Vec<f32> = rgb
+            .chunks_exact(3)
+            .map(|p| luma_bt601(p[0], p[1], p[2]))
+            .collect();
+        // Colour, then grey: the colour model cannot read the grey frame; an error names it.
+        let mut t = build(Preset::Head.config(60, 1)).unwrap();
+        t.init(Frame::with_rgb(w, h, &grey, &rgb).unwrap(), start)
+            .unwrap();
+        let e = t.update(Frame::new(w, h, &grey).unwrap()).unwrap_err();
+        assert!(matches!(e, Error::BadFrame { frame: 1, .. }), "{e:?}");
+        assert!(e.to_string().contains("grey frame"), "{e}");
+        // The colour frame after it is tracked as before.
+        t.update(Frame::with_rgb(w, h, &grey, &rgb).unwrap())
+            .unwrap();
+        // Grey, then colour: the grey model reads the colour frame's grey levels, as it would
+        // the grey frame, so the estimates are those of an all-grey track.
+        let mut a = build(Preset::Head.config(60, 1)).unwrap();
+        let mut b = build(Preset::Head.config(60, 1)).unwrap();
+        a.init(Frame::new(w, h, &grey).unwrap(), start).unwrap();
+        b.init(Frame::new(w, h, &grey).unwrap(), start).unwrap();
+        let ea = a
+            .update(Frame::with_rgb(w, h, &grey, &rgb).unwrap())
+            .unwrap();
+        let eb = b.update(Frame::new(w, h, &grey).unwrap()).unwrap();
+        assert_eq!(ea.bbox, eb.bbox);
+        assert_eq!(ea.status, eb.status);
+    }
+
+    #[test]
     fn colour_of_the_wrong_length_is_refused() {
         let grey = vec![0.0f32; 12];
         assert!(matches!(

@@ -320,6 +320,17 @@ fn run_paired(args: &PairedArgs) -> Result<()> {
         Some(path) => Some(OutputGuard::new(args.base.iter().chain(&args.variant)).file(path)?),
         None => None,
     };
+    // Each folder named, before anything is read from it.
+    for dir in args.base.iter().chain(&args.variant) {
+        if !dir.is_dir() {
+            let reason = if dir.exists() {
+                "not a folder: give the --out folder of a `track eval otb` run"
+            } else {
+                "no such folder: give the --out folder of a `track eval otb` run"
+            };
+            return Err(AppError::input(dir, reason));
+        }
+    }
     let protocols: Vec<Protocol> = if args.protocols.is_empty() {
         [Protocol::Ope, Protocol::Tre, Protocol::Sre]
             .into_iter()
@@ -334,11 +345,29 @@ fn run_paired(args: &PairedArgs) -> Result<()> {
         args.protocols.clone()
     };
     if protocols.is_empty() {
+        // Name a folder that lacks a protocol some other folder has, or else the first one.
+        let dirs: Vec<&PathBuf> = args.base.iter().chain(&args.variant).collect();
+        let has = |d: &PathBuf, p: Protocol| d.join(p.name()).join("otb.csv").is_file();
+        let partial = [Protocol::Ope, Protocol::Tre, Protocol::Sre]
+            .into_iter()
+            .find_map(|p| {
+                let missing = dirs.iter().find(|d| !has(d, p))?;
+                dirs.iter()
+                    .any(|d| has(d, p))
+                    .then(|| format!("{} has no {}/otb.csv", missing.display(), p.name()))
+            });
+        let named = partial
+            .or_else(|| {
+                dirs.first()
+                    .map(|d| format!("{} has no ope/, tre/ or sre/otb.csv", d.display()))
+            })
+            .unwrap_or_default();
         return Err(AppError::InvalidSetting {
             name: "--base and --variant".into(),
-            reason: "no protocol has an otb.csv in every folder (PROTOCOL/otb.csv, as `track \
-                     eval otb --out` writes)"
-                .into(),
+            reason: format!(
+                "no protocol has an otb.csv in every folder (PROTOCOL/otb.csv, as `track eval \
+                 otb --out` writes): {named}"
+            ),
         });
     }
     let mut report = String::new();

@@ -187,7 +187,21 @@ pub fn run(args: &Args) -> Result<()> {
             motion_est::Error::RegionTooSmall { .. } if mask.is_some() => {
                 AppError::setting("--mask", e.to_string())
             }
-            other => AppError::computation("motion estimation", other),
+            other => {
+                // No estimate at all (textureless frames): with --json still the documented
+                // failure object, so that a script reading standard output learns why.
+                let e = AppError::computation("motion estimation", other);
+                if args.json
+                    && let Err(print) = crate::output::println_stdout(&failure_json_without(
+                        spec,
+                        origin,
+                        &e.to_string(),
+                    ))
+                {
+                    return print;
+                }
+                e
+            }
         })?;
     let millis = start.elapsed().as_secs_f64() * 1e3;
     if let Err(reason) = assess(&est) {
@@ -332,6 +346,19 @@ fn failure_json(est: &MotionEstimate, reason: &str, millis: f64) -> String {
         "converged": est.converged,
         "reliable": est.reliable,
         "millis": millis,
+    })
+    .to_string()
+}
+
+/// The JSON failure object when the estimator returned no estimate: the reason and the model
+/// asked for, nothing measured.
+fn failure_json_without(spec: ModelSpec, origin: Option<[f64; 2]>, reason: &str) -> String {
+    serde_json::json!({
+        "status": "failed",
+        "reason": reason,
+        "model": spec.model.name(),
+        "offset": spec.offset,
+        "origin": origin,
     })
     .to_string()
 }

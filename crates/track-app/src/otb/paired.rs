@@ -22,6 +22,10 @@ pub struct AucTable {
     pub sequences: Vec<(String, f64)>,
     /// The set's mean success AUC.
     pub mean: f64,
+    /// `(sequence, frames scored)`, from the `frames` column (empty for a file without it).
+    pub frames: Vec<(String, usize)>,
+    /// The file read.
+    pub path: PathBuf,
 }
 
 /// Reads the success AUC of `tracker` (or of the file's only tracker) from `path`, an
@@ -50,7 +54,8 @@ pub fn read_auc(path: &Path, tracker: Option<&str>) -> Result<AucTable> {
         column("tracker")?,
         column("success_auc")?,
     );
-    let mut rows: Vec<(String, String, f64)> = Vec::new();
+    let frames_column = header.iter().position(|h| *h == "frames");
+    let mut rows: Vec<(String, String, f64, Option<usize>)> = Vec::new();
     for (k, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
         let fields: Vec<&str> = line.split(',').collect();
         if fields.len() != header.len() {
@@ -66,7 +71,20 @@ pub fn read_auc(path: &Path, tracker: Option<&str>) -> Result<AucTable> {
             .ok()
             .filter(|v: &f64| v.is_finite())
             .ok_or_else(|| bad(format!("line {}: success AUC `{}`", k + 2, fields[auc])))?;
-        rows.push((fields[seq].to_owned(), fields[trk].to_owned(), value));
+        let frames = match frames_column {
+            Some(c) => Some(
+                fields[c]
+                    .parse::<usize>()
+                    .map_err(|_| bad(format!("line {}: frames `{}`", k + 2, fields[c])))?,
+            ),
+            None => None,
+        };
+        rows.push((
+            fields[seq].to_owned(),
+            fields[trk].to_owned(),
+            value,
+            frames,
+        ));
     }
     let name = match tracker {
         Some(t) => t.to_owned(),
@@ -89,11 +107,16 @@ pub fn read_auc(path: &Path, tracker: Option<&str>) -> Result<AucTable> {
     let mut table = AucTable {
         sequences: Vec::new(),
         mean: f64::NAN,
+        frames: Vec::new(),
+        path: path.to_owned(),
     };
-    for (s, _, v) in rows.into_iter().filter(|r| r.1 == name) {
+    for (s, _, v, frames) in rows.into_iter().filter(|r| r.1 == name) {
         if s == "mean" {
             table.mean = v;
         } else {
+            if let Some(f) = frames {
+                table.frames.push((s.clone(), f));
+            }
             table.sequences.push((s, v));
         }
     }
@@ -112,6 +135,10 @@ pub enum Verdict {
     Hurts,
     /// Neither.
     Neither,
+    /// The paired differences are all the same non-zero number: with no seed-to-seed variation
+    /// the t-test has nothing to judge the difference against (the runs do not depend on the
+    /// seed, or the same results were given twice).
+    Untestable,
 }
 
 /// One sequence's paired comparison.
@@ -125,8 +152,8 @@ pub struct SequenceComparison {
     pub variant: f64,
     /// The mean paired difference, variant − base.
     pub difference: f64,
-    /// t = mean / (standard deviation / √n) of the differences (±∞ when every difference is the
-    /// same non-zero number, 0 when all are 0).
+    /// t = mean / (standard deviation / √n) of the differences (NaN when every difference is
+    /// the same non-zero number: [`Verdict::Untestable`]; 0 when all are 0).
     pub t: f64,
     /// The verdict at the level asked for.
     pub verdict: Verdict,
@@ -164,17 +191,22 @@ fn critical_t(dof: usize, level: f64) -> Result<f64> {
     Ok(t.inverse_cdf(1.0 - level))
 }
 
+/// The standard deviation (and mean) of paired differences in success AUC below which they count
+/// as not varying (as zero): far below the four decimals of `otb.csv`, far above rounding.
+const NO_SPREAD: f64 = 1e-9;
+
 /// The verdict on paired `differences` against the critical value, and t.
 pub fn verdict(differences: &[f64], critical: f64) -> (Verdict, f64) {
     let n = differences.len() as f64;
     let mean = differences.iter().sum::<f64>() / n;
     let var = differences.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    let t = if var > 0.0 {
+    // AUCs are read with four decimals: a spread below a billionth is rounding, not seed noise.
+    let t = if var.sqrt() > NO_SPREAD {
         mean / (var / n).sqrt()
-    } else if mean == 0.0 {
+    } else if mean.abs() <= NO_SPREAD {
         0.0
     } else {
-        f64::INFINITY.copysign(mean)
+        return (Verdict::Untestable, f64::NAN);
     };
     let v = if t > critical {
         Verdict::Helps
@@ -226,6 +258,7 @@ pub fn compare(base: &[AucTable], variant: &[AucTable], level: f64) -> Result<Co
                 ),
             })
     };
+    check_frames(base, variant)?;
     let mut sequences = Vec::with_capacity(names.len());
     for name in names {
         let mut differences = Vec::with_capacity(n);
@@ -266,6 +299,30 @@ pub fn compare(base: &[AucTable], variant: &[AucTable], level: f64) -> Result<Co
     })
 }
 
+/// Refuses pairs whose base and variant scored a sequence on different numbers of frames (a
+/// different `--frame-step`, or different footage): their success AUCs are not comparable.
+fn check_frames(base: &[AucTable], variant: &[AucTable]) -> Result<()> {
+    for (b, v) in base.iter().zip(variant) {
+        for (seq, fb) in &b.frames {
+            let Some((_, fv)) = v.frames.iter().find(|(s, _)| s == seq) else {
+                continue;
+            };
+            if fb != fv {
+                return Err(AppError::InvalidSetting {
+                    name: "--base and --variant".into(),
+                    reason: format!(
+                        "sequence `{seq}` was scored on {fb} frames in {} but on {fv} in {}: \
+                         compare runs on the same frames (the same sequences and --frame-step)",
+                        b.path.display(),
+                        v.path.display()
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The `otb.csv` of `protocol` in each results folder.
 pub fn csv_paths(dirs: &[PathBuf], protocol: Protocol) -> Vec<PathBuf> {
     dirs.iter()
@@ -297,11 +354,20 @@ pub fn markdown(protocol: Protocol, c: &Comparison, level: f64) -> String {
             Verdict::Helps => "helps",
             Verdict::Hurts => "hurts",
             Verdict::Neither => "—",
+            Verdict::Untestable => "untestable: no seed-to-seed variation",
         };
         let _ = writeln!(
             s,
-            "| {} | {:.3} | {:.3} | {:+.4} | {:.2} | {verdict} |",
-            q.sequence, q.base, q.variant, q.difference, q.t
+            "| {} | {:.3} | {:.3} | {:+.4} | {} | {verdict} |",
+            q.sequence,
+            q.base,
+            q.variant,
+            q.difference,
+            if q.t.is_finite() {
+                format!("{:.2}", q.t)
+            } else {
+                "—".to_owned()
+            }
         );
     }
     s
@@ -315,7 +381,12 @@ mod tests {
         let sequences: Vec<(String, f64)> =
             values.iter().map(|(s, v)| ((*s).to_owned(), *v)).collect();
         let mean = sequences.iter().map(|s| s.1).sum::<f64>() / sequences.len() as f64;
-        AucTable { sequences, mean }
+        AucTable {
+            sequences,
+            mean,
+            frames: Vec::new(),
+            path: PathBuf::new(),
+        }
     }
 
     #[test]
@@ -343,8 +414,14 @@ mod tests {
             verdict(&[-0.004, -0.005, -0.006], critical).0,
             Verdict::Hurts
         );
-        // Identical differences: t is infinite with their sign, or 0 for no difference.
-        assert_eq!(verdict(&[0.01, 0.01], critical).0, Verdict::Helps);
+        // Identical differences: no seed-to-seed noise to judge them by (also when they differ
+        // by rounding only), or no difference at all.
+        assert_eq!(verdict(&[0.01, 0.01], critical).0, Verdict::Untestable);
+        assert!(verdict(&[0.01, 0.01], critical).1.is_nan());
+        assert_eq!(
+            verdict(&[0.45 - 0.5, 0.55 - 0.6], critical).0,
+            Verdict::Untestable
+        );
         assert_eq!(verdict(&[0.0, 0.0, 0.0], critical), (Verdict::Neither, 0.0));
     }
 

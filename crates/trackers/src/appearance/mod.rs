@@ -342,6 +342,12 @@ impl Appearance {
         scaled(e, 1.0 / self.calibration)
     }
 
+    /// Whether the colour model reads colour (hue and saturation bins): it was started on a
+    /// colour frame whose target region is chromatic. Such a model cannot read a grey frame.
+    pub fn reads_colour(&self) -> bool {
+        self.bins.is_colour()
+    }
+
     /// Reads the window around `estimate` (the whole frame while the target is believed lost,
     /// when [`AppearanceSettings::whole_frame_while_lost`])
     /// and prepares what the terms read: the log-ratios of the blended models, the reference

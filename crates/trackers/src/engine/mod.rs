@@ -332,6 +332,22 @@ impl Tracker for ParticleTracker {
             return Err(Error::NotInitialised);
         }
         frame.check_size(self.size, self.frame + 1)?;
+        // A grey frame after a colour start: the colour model would find no target colour on it
+        // and report the target lost, frame after frame, while it is in view. Refused instead.
+        if frame.colour().is_none()
+            && self
+                .appearance
+                .as_ref()
+                .is_some_and(Appearance::reads_colour)
+        {
+            return Err(Error::BadFrame {
+                frame: self.frame + 1,
+                reason: "a grey frame, but the track started on a colour frame and its colour \
+                         model reads colour: give every frame in colour (a grey frame as RGB \
+                         with equal channels tracks no better), or every frame in grey"
+                    .into(),
+            });
+        }
         let step = self.frame as u64 + 1;
         let seed = self.config.seed;
         let resampled = {

@@ -136,8 +136,9 @@ pub struct Args {
     /// Also smooth the run once every frame is tracked (forward filtering–backward smoothing of
     /// the recorded particles: each frame's estimate given the whole sequence) and write
     /// OUT/smoothed.csv (the columns of track.csv) and OUT/smoothed_boxes.txt; the plots draw
-    /// both. Memory grows with frames × particles; not for the head tracker, nor for a run that
-    /// is interrupted.
+    /// both. Memory grows with frames × particles. Every tracker is smoothed, head included (it
+    /// runs on the same engine; the smoother's transition density leaves out its reacquisition
+    /// jumps, as it does every tracker's); not written for a run that is interrupted.
     #[arg(long)]
     pub smooth: bool,
     /// No progress bar, no notice (such as the GIF's) and no summary.
