@@ -71,6 +71,24 @@ pub enum AppError {
         /// The output folder.
         out: PathBuf,
     },
+    /// `track eval otb` was stopped by a signal after the runs in progress: the tables of the runs
+    /// that finished were written, and say so.
+    #[error(
+        "interrupted by {signal} after {runs} of {total} runs; the tables of those runs are in {}",
+        out.display()
+    )]
+    InterruptedRuns {
+        /// The signal's name.
+        signal: &'static str,
+        /// The signal's number: the exit code is 128 + it.
+        number: u8,
+        /// Runs finished and scored.
+        runs: usize,
+        /// Runs asked for.
+        total: usize,
+        /// The output folder.
+        out: PathBuf,
+    },
     /// A signal stopped the command before it began tracking: nothing was written.
     #[error("interrupted by {signal} before tracking began; nothing was written")]
     InterruptedBeforeStart {
@@ -91,6 +109,7 @@ impl AppError {
             AppError::Write { .. } => 4,
             AppError::StdoutClosed => 0,
             AppError::Interrupted { number, .. }
+            | AppError::InterruptedRuns { number, .. }
             | AppError::InterruptedBeforeStart { number, .. } => 128u8.saturating_add(*number),
         }
     }

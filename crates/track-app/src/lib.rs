@@ -23,6 +23,7 @@ pub mod render;
 pub mod report;
 pub mod sequence;
 pub mod session;
+pub mod signals;
 
 // The README's example is compiled and run as a doctest, so it cannot go stale.
 #[cfg(doctest)]

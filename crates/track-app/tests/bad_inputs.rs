@@ -362,3 +362,65 @@ fn smooth_help_says_what_it_does_for_head() {
     assert!(!smooth.contains("not for the head"), "{smooth}");
     assert!(smooth.contains("head included"), "{smooth}");
 }
+
+#[cfg(unix)]
+#[test]
+fn eval_otb_stopped_by_sigterm_writes_the_tables_of_the_runs_finished() {
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    // A short first sequence, then long ones: the signal comes once the first is written.
+    let mut seqs = vec![otb_folder(dir.path(), "a-short", 4)];
+    for name in ["b-long", "c-long"] {
+        seqs.push(otb_folder(dir.path(), name, 40));
+    }
+    let out = dir.path().join("out");
+    let mut args = vec!["eval".to_owned(), "otb".to_owned()];
+    args.extend(seqs.iter().map(|p| s(p).to_owned()));
+    args.extend(
+        [
+            "--tracker",
+            "m1",
+            "--particles",
+            "4000",
+            "--protocol",
+            "tre",
+            "--out",
+            s(&out),
+            "--quiet",
+        ]
+        .map(str::to_owned),
+    );
+    let mut child = std::process::Command::new(common::TRACK)
+        .args(&args)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let first = out.join("tre/m1/a-short.1.txt");
+    let start = Instant::now();
+    while !first.exists() {
+        assert!(child.try_wait().unwrap().is_none(), "eval otb ended early");
+        assert!(start.elapsed() < Duration::from_secs(120), "no box file");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let ok = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(143), "{}", stderr(&o));
+    let e = one_error_line(&o);
+    assert!(
+        e.contains("interrupted by SIGTERM") && e.contains("runs"),
+        "{e}"
+    );
+    let md = std::fs::read_to_string(out.join("tre/otb.md")).unwrap();
+    assert!(md.contains("Interrupted by SIGTERM"), "{md}");
+    let csv = std::fs::read_to_string(out.join("tre/otb.csv")).unwrap();
+    assert!(csv.contains(",a-short,m1,"), "{csv}");
+    assert!(out.join("index.html").is_file());
+    // No run started after the signal: the last sequence has no box file.
+    assert!(!out.join("tre/m1/c-long.1.txt").exists());
+}

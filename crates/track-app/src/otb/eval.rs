@@ -229,6 +229,8 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
         out,
         quiet,
     } = evaluation;
+    // First of all, so that a signal at any point ends the evaluation cleanly.
+    let signals = crate::signals::StopSignals::install()?;
     let step = frame_step as usize;
     let results = parse_results(results)?;
     let mut protocols = protocols.to_vec();
@@ -305,8 +307,14 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
         .iter()
         .map(|s| s.starts.iter().map(Vec::len).sum::<usize>() * configs.len())
         .sum();
+    signals.stop_if_received()?;
     let bar = progress_of(total as u64, quiet, "OTB", "runs");
+    // Runs finished, for the tables' note when a signal stops the evaluation.
+    let mut finished = 0;
     for (si, seq) in prepared.iter().enumerate() {
+        if signals.received().is_some() {
+            break;
+        }
         bar.set_message(format!("OTB ({})", seq.name));
         let mut source = open_sequence(&seq.dir.to_string_lossy())?.source;
         let (frames, read) = read_every(&mut source, step)?;
@@ -325,21 +333,26 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
                     .flat_map(move |ci| (0..seq.starts[pi].len()).map(move |k| (pi, ci, k)))
             })
             .collect();
-        let outcomes: Vec<Option<RunOutcome>> = jobs
+        // A run not started because a signal came is `None`; the runs in progress finish.
+        let outcomes: Vec<Option<Option<RunOutcome>>> = jobs
             .par_iter()
             .map(|&(pi, ci, k)| {
+                if signals.received().is_some() {
+                    return Ok(None);
+                }
                 let r = track_run(&frames, &seq.truth, &configs[ci], &seq.starts[pi][k]);
                 bar.inc(1);
-                r
+                r.map(Some)
             })
             .collect::<Result<_>>()?;
+        finished += outcomes.iter().filter(|o| o.is_some()).count();
         drop(frames);
         let mut outcomes = outcomes.into_iter();
         for (pi, &protocol) in protocols.iter().enumerate() {
             for config in &configs {
                 let mut mine = Vec::new();
                 for k in 0..seq.starts[pi].len() {
-                    if let Some(Some(o)) = outcomes.next() {
+                    if let Some(Some(Some(o))) = outcomes.next() {
                         let path = boxes_path(out, protocol, &config.name, &seq.name, k);
                         write_atomic(&path, boxes_text(&o.boxes).as_bytes())?;
                         mine.push(o);
@@ -350,6 +363,7 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
         }
     }
     bar.finish_and_clear();
+    let interrupted = signals.received().filter(|_| finished < total);
     // Rows in a fixed order: trackers (presets, configurations, then --results), sequences.
     let mut sections = Vec::new();
     for (pi, &protocol) in protocols.iter().enumerate() {
@@ -392,6 +406,12 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
         if let Some(c) = ceiling {
             md.push_str(&format!("\n{}\n", ceiling_sentence(*c)));
         }
+        if let Some((signal, _)) = interrupted {
+            md = format!(
+                "**Interrupted by {signal}**: {finished} of {total} tracker runs finished; these \
+                 tables hold those runs only (each row's `runs` column says how many).\n\n{md}"
+            );
+        }
         if step > 1 {
             md = format!(
                 "One frame in {step} of each sequence, from its first (`--frame-step {step}`): \
@@ -417,10 +437,25 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
             },
         )
         .collect();
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let mut command = std::env::args().collect::<Vec<_>>().join(" ");
+    if let Some((signal, _)) = interrupted {
+        command.push_str(&format!(
+            " — interrupted by {signal}: {finished} of {total} runs finished"
+        ));
+    }
     write_atomic(
         &out.join("index.html"),
         super::page::render(&command, &page_sections).as_bytes(),
     )?;
-    crate::output::print_stdout(&printed)
+    crate::output::print_stdout(&printed)?;
+    match interrupted {
+        Some((signal, number)) => Err(AppError::InterruptedRuns {
+            signal,
+            number,
+            runs: finished,
+            total,
+            out: out.to_path_buf(),
+        }),
+        None => Ok(()),
+    }
 }

@@ -6,7 +6,7 @@ use indicatif::ProgressBar;
 use vision_core::{BoundingBox, Ellipse};
 
 use super::Kept;
-use super::signals::StopSignals;
+use crate::signals::StopSignals;
 
 use crate::record::FrameRecord;
 use crate::sequence::{Frame, FrameSource, Source};

@@ -14,13 +14,13 @@ use crate::progress::stream_progress;
 use crate::render::OverlayFormat;
 use crate::sequence::{FrameSource, Sequence, Source, open_sequence};
 use crate::session::{ColourBy, DrawOptions, Session};
+use crate::signals;
 use crate::{AppError, Result};
 use outputs::{Kept, write_outputs};
 
 mod frames;
 mod outputs;
 pub mod settings;
-mod signals;
 mod thinned;
 
 pub use crate::progress::{progress, progress_of, progress_to, rate_in, rate_text};

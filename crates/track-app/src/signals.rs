@@ -1,7 +1,8 @@
-//! Stopping `track run` cleanly on Ctrl-C (SIGINT), SIGTERM and SIGHUP.
+//! Stopping `track run` and `track eval otb` cleanly on Ctrl-C (SIGINT), SIGTERM and SIGHUP.
 //!
-//! The handlers only record the signal; the run checks [`StopSignals::received`] between frames,
-//! stops reading, and writes the outputs of the frames tracked so far, so no temporary file is
+//! The handlers only record the signal; `run` checks [`StopSignals::received`] between frames,
+//! stops reading, and writes the outputs of the frames tracked so far (`eval otb` checks it
+//! before each run, finishes the runs in progress and writes the tables of those finished), so no temporary file is
 //! left and nothing computed is lost. A second signal ends the process at once (exit 128 + the
 //! signal number), for a user who will not wait for the outputs.
 
