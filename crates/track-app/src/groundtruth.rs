@@ -40,37 +40,17 @@ impl BoxInFrame for BoundingBox {
     }
 
     fn check_in_frame(&self, width: usize, height: usize) -> std::result::Result<(), String> {
-        let shown = self.shown();
-        if !self.is_finite() {
-            return Err(format!("box {shown} is not finite"));
-        }
-        if self.w <= 0.0 || self.h <= 0.0 {
-            return Err(format!("box {shown} has zero or negative size"));
-        }
-        let (cx, cy) = self.centre();
-        if cx < 0.0 || cy < 0.0 || cx >= width as f64 || cy >= height as f64 {
-            return Err(format!(
-                "box {shown} lies outside the {width}×{height} frame (its centre is outside)"
-            ));
-        }
-        Ok(())
+        // The one check, shared with the Python package (vision-core).
+        self.check_start(width, height).map_err(|e| e.to_string())
     }
 
     fn shown(&self) -> String {
-        [self.x, self.y, self.w, self.h].map(fmt_num).join(",")
+        BoundingBox::shown(self)
     }
 }
 
-/// A number for a message: as typed for ordinary values (`12.5`), in scientific notation when
-/// very large or very small (`1e300`, not 301 digits), so that an error stays one short line.
-pub fn fmt_num(v: f64) -> String {
-    let a = v.abs();
-    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&a) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
-}
+/// A number for a message (vision-core's, shared with the Python package).
+pub use vision_core::fmt_num;
 
 /// Parses `N` comma-separated finite numbers from a command-line value.
 fn parse_numbers<const N: usize>(text: &str, name: &str, form: &str) -> Result<[f64; N]> {

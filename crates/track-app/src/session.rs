@@ -172,6 +172,8 @@ impl Session {
                     "the initial box (--init, or the first labelled box)",
                     reason,
                 ),
+                // A frame the tracker cannot start on (too small): the input's fault.
+                trackers::Error::BadFrame { reason, .. } => AppError::input(&frame.name, reason),
                 other => failed(other),
             })
         }?;

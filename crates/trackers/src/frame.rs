@@ -425,6 +425,29 @@ mod tests {
     }
 
     #[test]
+    fn a_frame_too_small_to_track_on_is_refused_at_init_not_at_update() {
+        for p in Preset::ALL {
+            for (w, h) in [(1, 1), (1, 6), (6, 1)] {
+                let mut t = build(p.config(20, 1)).unwrap();
+                let grey = vec![100.0f32; w * h];
+                let start = Ellipse::new(w as f64 / 2.0, h as f64 / 2.0, 0.4, 0.4, 0.0);
+                assert!(
+                    t.init(Frame::new(w, h, &grey).unwrap(), start).is_err(),
+                    "{} on {w}×{h}",
+                    p.name()
+                );
+            }
+            // From 2×2 every tracker tracks.
+            let grey = [50.0f32, 200.0, 50.0, 200.0];
+            let mut t = build(p.config(20, 1)).unwrap();
+            let start = Ellipse::new(1.0, 1.0, 0.5, 0.5, 0.0);
+            if t.init(Frame::new(2, 2, &grey).unwrap(), start).is_ok() {
+                t.update(Frame::new(2, 2, &grey).unwrap()).unwrap();
+            }
+        }
+    }
+
+    #[test]
     fn colour_of_the_wrong_length_is_refused() {
         let grey = vec![0.0f32; 12];
         assert!(matches!(

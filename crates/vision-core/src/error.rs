@@ -33,4 +33,11 @@ pub enum Error {
         /// Row-major index of the first such pixel.
         index: usize,
     },
+    /// A box that cannot start a tracker in its frame ([`crate::BoundingBox::check_start`]);
+    /// the reason shows the box compactly ([`crate::fmt_num`]).
+    #[error("{reason}")]
+    StartBox {
+        /// What is wrong, with the box and the frame size.
+        reason: String,
+    },
 }

@@ -180,6 +180,43 @@ impl BoundingBox {
         [self.x, self.y, self.w, self.h]
     }
 
+    /// `x,y,w,h` written compactly for messages ([`fmt_num`]): `1e300`, never 301 digits.
+    pub fn shown(&self) -> String {
+        [self.x, self.y, self.w, self.h].map(fmt_num).join(",")
+    }
+
+    /// Checks that the box can start a tracker in a `width`×`height` frame: finite, of positive
+    /// width and height, with its centre inside the frame (it may stick out of the frame partly,
+    /// as real targets near the border do). The one check of the command line and the Python
+    /// package, so that both say the same, in one short line.
+    ///
+    /// # Errors
+    /// [`Error::StartBox`](crate::Error::StartBox) naming the box ([`BoundingBox::shown`]) and
+    /// the frame size.
+    ///
+    /// # Examples
+    /// ```
+    /// use vision_core::BoundingBox;
+    /// let e = BoundingBox::new(100.0, 100.0, 1e300, 1e300).check_start(640, 480).unwrap_err();
+    /// assert!(e.to_string().len() < 120, "{e}");
+    /// assert!(BoundingBox::new(10.0, 10.0, 20.0, 20.0).check_start(640, 480).is_ok());
+    /// ```
+    pub fn check_start(&self, width: usize, height: usize) -> crate::Result<()> {
+        let shown = self.shown();
+        let reason = if !self.is_finite() {
+            format!("box {shown} is not finite")
+        } else if self.w <= 0.0 || self.h <= 0.0 {
+            format!("box {shown} has zero or negative size")
+        } else {
+            let (cx, cy) = self.centre();
+            if cx >= 0.0 && cy >= 0.0 && cx < width as f64 && cy < height as f64 {
+                return Ok(());
+            }
+            format!("box {shown} lies outside the {width}×{height} frame (its centre is outside)")
+        };
+        Err(crate::Error::StartBox { reason })
+    }
+
     /// The centre `(x + w/2, y + h/2)`.
     pub fn centre(&self) -> (f64, f64) {
         (self.x + 0.5 * self.w, self.y + 0.5 * self.h)
@@ -216,6 +253,17 @@ impl BoundingBox {
     pub fn inscribed_ellipse(&self) -> Ellipse {
         let (cx, cy) = self.centre();
         Ellipse::new(cx, cy, 0.5 * self.w, 0.5 * self.h, 0.0)
+    }
+}
+
+/// A number for a message: as typed for ordinary values (`12.5`), in scientific notation when
+/// very large or very small (`1e300`, not 301 digits), so that an error stays one short line.
+pub fn fmt_num(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }
 

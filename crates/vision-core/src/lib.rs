@@ -14,7 +14,7 @@ mod status;
 
 pub use convert::{ToGreyBuffer, grey_from_unit_range};
 pub use error::{Error, Result};
-pub use geometry::{BoundingBox, Ellipse};
+pub use geometry::{BoundingBox, Ellipse, fmt_num};
 pub use image::{GreyBuffer, GreyImage, luma_bt601};
 pub use order::sort_natural;
 pub use status::{FAILURE_IOU, FAILURE_RUN, TrackStatus, first_failure};

@@ -52,6 +52,9 @@ use estimate::PosteriorSummary;
 use motion::MotionFrames;
 use scale::WorkingScale;
 
+/// The smallest width and height of a frame a track can start on.
+pub const MIN_FRAME_SIDE: usize = 2;
+
 /// The particle-filter tracker behind every preset.
 #[derive(Debug)]
 pub struct ParticleTracker {
@@ -260,6 +263,19 @@ impl Tracker for ParticleTracker {
 
     fn init(&mut self, frame: Frame<'_>, ellipse: Ellipse) -> Result<Estimate> {
         let start = Instant::now();
+        // A frame one pixel wide or high has no gradient across it: every measurement would
+        // fail at the first update, so the track is refused at its start.
+        if frame.width() < MIN_FRAME_SIDE || frame.height() < MIN_FRAME_SIDE {
+            return Err(Error::BadFrame {
+                frame: 0,
+                reason: format!(
+                    "{}×{} is too small to track on: both sides need at least {MIN_FRAME_SIDE} \
+                     pixels",
+                    frame.width(),
+                    frame.height()
+                ),
+            });
+        }
         // Exactly what the shape space can represent, or an error (a rotated ellipse for a
         // tracker of axis-aligned ones).
         let ellipse = self.config.initial_ellipse(&ellipse)?;
