@@ -203,19 +203,29 @@ fn learn_clutter_out_refuses_fifo_symlink_and_folder() {
     assert_eq!(std::fs::read_to_string(&target).unwrap(), "precious");
     assert!(folder.is_dir());
     assert!(temporaries(dir.path()).is_empty());
-    // A regular file is replaced, as before.
+    // A regular file of the user's is refused too (the output guard); one track wrote is
+    // replaced.
     let file = dir.path().join("model.json");
     std::fs::write(&file, "old").unwrap();
-    let o = track(&[
-        "learn-clutter",
-        s(&png),
-        "--lines",
-        "200",
-        "--out",
-        s(&file),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(std::fs::read_to_string(&file).unwrap().contains("clusters"));
+    let learn = || {
+        track(&[
+            "learn-clutter",
+            s(&png),
+            "--lines",
+            "200",
+            "--out",
+            s(&file),
+        ])
+    };
+    let o = learn();
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "old");
+    std::fs::remove_file(&file).unwrap();
+    for _ in 0..2 {
+        let o = learn();
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(std::fs::read_to_string(&file).unwrap().contains("clusters"));
+    }
 }
 
 #[cfg(unix)]
