@@ -399,10 +399,19 @@ impl Status {
 ///     `track run` does with colour images; a grey image stays grey (read grey footage with
 ///     `cv2.IMREAD_GRAYSCALE` for the same boxes as `track run`).
 ///
-/// Errors: a frame of another dtype raises TypeError; another shape, an empty frame, a frame
-/// of another size than at `init`, a NaN or infinity in a float frame, or a box outside the
-/// frame raise ValueError; `update` before `init` raises RuntimeError. The GIL is released
-/// while a frame is read and tracked.
+/// `particles` and `seed` take an int or a numpy integer (anything with `__index__`, but not a
+/// bool).
+///
+/// Errors: a frame of another dtype, or an argument of the wrong type, raises TypeError;
+/// another shape, an empty frame, a frame of another size than at `init`, a NaN or infinity in
+/// a float frame, a level outside 0–255 in a float32 frame, a box outside the frame, or a bad
+/// config value (named by its key) raise ValueError; a frame of more than 2**26 pixels raises
+/// MemoryError before anything is allocated; `update` before `init` raises RuntimeError.
+///
+/// Threads: one tracker may be used from several threads. Its calls run one at a time, in the
+/// order they take its lock; a call waits for the lock, and computes, without the GIL, so other
+/// Python threads go on meanwhile. Reading `status` during an `update` in another thread waits
+/// for that update and gives its result.
 ///
 /// Example:
 ///     >>> t = contour_track.Tracker("head", seed=1)
@@ -906,14 +915,18 @@ fn parse_roi(roi: Option<&Bound<'_, PyAny>>, width: usize, height: usize) -> PyR
 ///
 /// Arguments:
 ///     f0, f1: frames of one size, as `Tracker.update` takes them (`rgb=True` for RGB colour).
-///     roi: None (the whole frame), a box (x, y, w, h), or a mask of the frames' H×W: bool,
+///     roi: None (the whole frame), a box (x, y, w, h), or a mask of the frames' H×W (or
+///         H×W×1): bool,
 ///         uint8 (non-zero pixels count, as OpenCV's 0/255 masks) or float weights in [0, 1].
 ///     model: "translation" [tx, ty], "scale" [tx, ty, k] or "affine" [a1..a6] (Odobez Eq. 13:
 ///         dx = a1 + a2·x + a3·y, dy = a4 + a5·x + a6·y, with x, y from `origin`).
 ///     offset: also estimate an intensity offset (last parameter).
 ///
 /// Returns a `Motion`; its `params` raise `UnreliableMotion` when the estimate is not
-/// reliable. Bad frames, masks or boxes raise TypeError or ValueError.
+/// reliable, including when none could be computed (a region without texture, such as constant
+/// frames: the parameters are NaN). Bad frames, masks or boxes raise TypeError or ValueError;
+/// frames of more than 2**26 pixels raise MemoryError before anything is allocated. A mask may
+/// be H×W or H×W×1.
 #[pyfunction]
 #[pyo3(signature = (f0, f1, roi=None, model="affine", *, offset=false, rgb=false))]
 fn estimate_motion(
