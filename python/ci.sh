@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The Python package's CI: a fresh virtual environment, `pip install ./python pytest numpy` (which
-# builds the Rust code in release mode through maturin), then pytest with its summary.
+# The Python package's CI: a fresh virtual environment, `pip install "./python[dask]" pytest numpy`
+# (which builds the Rust code in release mode through maturin, and installs Dask for
+# contour_track.cluster and its tests), then pytest with its summary.
 #
 # The determinism tests compare the binding's boxes with `track run`'s: they use $TRACK_BIN, or
 # the newest executable target/*/track of the repository (built here when there is none;
@@ -29,7 +30,7 @@ fi
 export CONTOUR_TRACK_REQUIRE_TRACK_BIN=1
 start=$(date +%s)
 "$venv/bin/python" -m pip install --quiet --upgrade pip
-"$venv/bin/python" -m pip install --quiet "$repo/python" pytest numpy
+"$venv/bin/python" -m pip install --quiet "$repo/python[dask]" pytest numpy
 echo "python/ci.sh: pip install took $(( $(date +%s) - start )) s"
 cd "$repo/python"
 # The pytest script, not `python -m pytest`: the latter puts python/ on sys.path, where the

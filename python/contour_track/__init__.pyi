@@ -67,7 +67,15 @@ class Tracker:
     """A particle-filter tracker, shaped like OpenCV's trackers.
 
     Frames: uint8 HxWx3 (BGR, or RGB with rgb=True), uint8 HxW grey, float32 HxW grey levels
-    or float32 HxWx3 colour in 0-255; any strides. Bad frames raise TypeError or ValueError.
+    or float32 HxWx3 colour in 0-255; any strides.
+
+    particles and seed take an int or a numpy integer (anything with __index__ but bool).
+
+    Raises: TypeError (a frame of another dtype, an argument of the wrong type), ValueError (a
+    bad shape, value, box, setting or config value, named by its key), MemoryError (a frame of
+    more than 2**26 pixels, before anything is allocated), RuntimeError (update before init, a
+    tracker that failed). One Tracker may be used from several threads: its calls run one at a
+    time (a lock, waited on without the GIL); reading status during an update waits for it.
     """
 
     def __init__(
@@ -101,7 +109,11 @@ class Tracker:
         """Tracks into the next frame; returns (ok, (x, y, w, h))."""
 
 class UnreliableMotion(RuntimeError):
-    """The motion estimate is not reliable: its parameters do not describe the region's motion."""
+    """The motion estimate is not reliable: its parameters do not describe the region's motion.
+
+    Raised by Motion.params, .covariance and .affine of an unreliable estimate, including one
+    that could not be computed at all (a region without texture: the parameters are NaN).
+    """
 
 class Motion:
     """A motion estimate; params, covariance and affine raise UnreliableMotion when unreliable."""
@@ -147,4 +159,32 @@ def estimate_motion(
     offset: bool = False,
     rgb: bool = False,
 ) -> Motion:
-    """Estimates the dominant motion of roi from f0 to f1 (robust, multiresolution)."""
+    """Estimates the dominant motion of roi from f0 to f1 (robust, multiresolution).
+
+    roi: None, a box (x, y, w, h), or a mask of the frames' HxW (or HxWx1). A failed estimate
+    (constant frames) is returned as an unreliable Motion, never raised. Raises TypeError and
+    ValueError for bad arguments, MemoryError for frames too large to allocate.
+    """
+
+RECORD_DTYPE: np.dtype
+"""The dtype of track_video's records: frame, x, y, w, h, cx, cy, a, b, angle, state, p_locked,
+p_partial, p_lost (NaN without a status process), ess, millis."""
+
+def track_video(
+    source: Union[str, "os.PathLike[str]"],
+    init: Optional[Sequence[float]] = None,
+    preset: str = "head",
+    seed: Optional[int] = 1,
+    particles: Optional[int] = None,
+    config: Union[None, Mapping[str, Any], str, "os.PathLike[str]"] = None,
+    *,
+    out: Union[None, str, "os.PathLike[str]"] = None,
+    with_summary: bool = False,
+) -> Any:
+    """Tracks a video file, image folder or OTB folder as `track run` does: the same boxes, and
+    with out= the same boxes.txt, track.csv and summary.json. Returns a structured array of
+    RECORD_DTYPE, one record per tracked frame (with with_summary=True, (records, summary)).
+
+    Raises TypeError and ValueError for bad arguments (a missing or unreadable source, a box
+    outside the frame), OSError for an output folder that cannot be written, RuntimeError for a
+    tracker that failed."""

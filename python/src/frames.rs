@@ -5,7 +5,7 @@
 //! * `uint8` H×W×3, BGR (OpenCV's order, the default) or RGB: grey by
 //!   [`vision_core::luma_bt601`], and the colour pixels (as a colour PNG). A C-contiguous
 //!   frame's pixels are borrowed, not copied, in either order (`trackers::Frame::with_bgr`).
-//! * `float32` H×W: grey levels, borrowed when C-contiguous; every value must be finite.
+//! * `float32` H×W: grey levels in 0–255, borrowed when C-contiguous; every value must be finite.
 //! * `float32` H×W×3: colour in 0–255; grey by the same weights in f32, and the RGB pixels rounded
 //!   (an integer-valued float frame gives the trackers exactly what its `uint8` twin gives).
 //!
@@ -15,7 +15,7 @@ use numpy::ndarray::{ArrayView2, ArrayView3, Axis, Ix2, Ix3};
 use numpy::{
     PyArray2, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use vision_core::{GreyImage, luma_bt601};
 
@@ -28,6 +28,20 @@ pub enum ChannelOrder {
     Bgr,
     /// Red, green, blue: Pillow, imageio, matplotlib.
     Rgb,
+}
+
+/// The most pixels a frame may have: the largest frame `track` reads (a Y4M frame's limit).
+/// Larger frames raise `MemoryError` before anything is allocated.
+pub const MAX_FRAME_PIXELS: usize = track_app::sequence::MAX_PIXELS;
+
+/// Reserves room for `n` more values in `buffer`, or reports a `MemoryError`.
+fn reserve<T>(buffer: &mut Vec<T>, n: usize) -> Result<(), FrameError> {
+    buffer.try_reserve(n).map_err(|_| {
+        FrameError::Memory(format!(
+            "cannot allocate the frame's buffer of {n} values ({} bytes)",
+            n.saturating_mul(std::mem::size_of::<T>())
+        ))
+    })
 }
 
 /// A numpy frame, checked for dtype and shape, borrowed read-only while the binding reads it.
@@ -63,7 +77,8 @@ impl<'py> FrameInput<'py> {
     ///
     /// # Errors
     /// `TypeError` for something that is not a numpy array or has another dtype than `uint8` or
-    /// `float32`; `ValueError` for another shape than H×W, H×W×1 or H×W×3, or an empty frame.
+    /// `float32`; `ValueError` for another shape than H×W, H×W×1 or H×W×3, or an empty frame;
+    /// `MemoryError` for a frame of more than [`MAX_FRAME_PIXELS`] pixels.
     pub fn read(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Self> {
         let Ok(array) = obj.cast::<PyUntypedArray>() else {
             return Err(PyTypeError::new_err(format!(
@@ -94,6 +109,15 @@ impl<'py> FrameInput<'py> {
             return Err(PyValueError::new_err(format!(
                 "{what} is empty (shape {})",
                 shape_text(&shape)
+            )));
+        }
+        // Checked before anything is allocated: a broadcast view of one pixel can claim any
+        // size, and the buffers (and the trackers' own) would then fail to allocate.
+        let pixels = width.checked_mul(height).filter(|&p| p <= MAX_FRAME_PIXELS);
+        if pixels.is_none() {
+            return Err(PyMemoryError::new_err(format!(
+                "{what} is {width}x{height} pixels, more than the {MAX_FRAME_PIXELS} pixels of \
+                 the largest frame the trackers take (8192x8192)"
             )));
         }
         let busy =
@@ -172,6 +196,7 @@ impl FrameBuffers {
             FrameView::GreyU8(a) => {
                 let (h, w) = a.dim();
                 self.grey.clear();
+                reserve(&mut self.grey, w * h)?;
                 match a.as_slice() {
                     Some(pixels) => self.grey.extend(pixels.iter().map(|&v| f32::from(v))),
                     None => self.grey.extend(a.iter().map(|&v| f32::from(v))),
@@ -181,6 +206,7 @@ impl FrameBuffers {
             FrameView::ColourU8(a) => {
                 let (h, w, _) = a.dim();
                 self.grey.clear();
+                reserve(&mut self.grey, w * h)?;
                 match (a.as_slice(), order) {
                     (Some(pixels), ChannelOrder::Rgb) => {
                         self.grey
@@ -199,6 +225,7 @@ impl FrameBuffers {
                     }
                     (None, _) => {
                         self.rgb.clear();
+                        reserve(&mut self.rgb, 3 * w * h)?;
                         for p in a.lanes(Axis(2)) {
                             let (r, g, b) = (p[red], p[1], p[blue]);
                             self.grey.push(luma_bt601(r, g, b));
@@ -214,10 +241,26 @@ impl FrameBuffers {
                     Some(data) => data,
                     None => {
                         self.grey.clear();
+                        reserve(&mut self.grey, w * h)?;
                         self.grey.extend(a.iter().copied());
                         &self.grey
                     }
                 };
+                // Grey levels lie in 0–255, as in a float32 colour frame: a frame scaled to
+                // 0–1 (or 0–65535) would otherwise be tracked with edges 255 times too weak
+                // (or strong) for the trackers' thresholds. A NaN fails this test too and is
+                // reported as non-finite.
+                if let Some(i) = data.iter().position(|v| !(0.0..=255.0).contains(v)) {
+                    let v = data[i];
+                    if !v.is_finite() {
+                        return Err(non_finite(i / w, i % w));
+                    }
+                    return Err(FrameError::Value(format!(
+                        "a float32 grey frame holds levels in 0–255; row {}, column {} has {v}",
+                        i / w,
+                        i % w
+                    )));
+                }
                 // One pass checks every value, the trackers' own check (`GreyImage::new`); its
                 // error gives the first non-finite pixel's index.
                 return match GreyImage::new(w, h, data) {
@@ -232,6 +275,8 @@ impl FrameBuffers {
                 let (h, w, _) = a.dim();
                 self.grey.clear();
                 self.rgb.clear();
+                reserve(&mut self.grey, w * h)?;
+                reserve(&mut self.rgb, 3 * w * h)?;
                 for (i, p) in a.lanes(Axis(2)).into_iter().enumerate() {
                     let (r, g, b) = (p[red], p[1], p[blue]);
                     if !(r.is_finite() && g.is_finite() && b.is_finite()) {

@@ -10,7 +10,7 @@
 
 use numpy::{PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::create_exception;
-use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -18,9 +18,11 @@ use motion_est::{MaskView, ModelSpec, MotionEstimate, MotionEstimator, MotionMod
 use trackers::{ConfigFormat, Estimate, Preset, TrackerConfig};
 use vision_core::{BoundingBox, TrackStatus};
 
+mod batch;
 mod frames;
 
 use frames::{ChannelOrder, FrameBuffers, FrameInput};
+use track_app::groundtruth::fmt_num;
 
 create_exception!(
     _native,
@@ -42,22 +44,173 @@ fn tracker_error(e: trackers::Error) -> PyErr {
     }
 }
 
-/// Extracts an optional non-negative integer keyword with a clear `ValueError`/`TypeError`.
+/// An integer argument as Python's `operator.index` reads it: an `int`, or any object with
+/// `__index__` (numpy's integer scalars), but not a `bool` (numpy's `bool_` included) nor a float.
+///
+/// # Errors
+/// `TypeError` naming `what` and the type given.
+fn index_of<'py>(v: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, pyo3::types::PyInt>> {
+    let type_name = v.get_type().name()?.to_string();
+    let refused = || {
+        PyTypeError::new_err(format!(
+            "{what} must be an int (or a numpy integer), got {type_name}"
+        ))
+    };
+    if v.is_instance_of::<pyo3::types::PyBool>() || type_name == "bool_" || type_name == "bool" {
+        return Err(refused());
+    }
+    if let Ok(i) = v.cast::<pyo3::types::PyInt>() {
+        return Ok(i.clone());
+    }
+    let index = v.py().import("operator")?.call_method1("index", (v,));
+    match index {
+        Ok(i) => i.cast_into::<pyo3::types::PyInt>().map_err(|_| refused()),
+        Err(_) => Err(refused()),
+    }
+}
+
+/// An integer for a message: as it is up to 20 digits, else its number of digits, so that the
+/// message stays one short line.
+fn int_text(i: &Bound<'_, pyo3::types::PyInt>) -> String {
+    let text = i.to_string();
+    let digits = text.trim_start_matches('-').len();
+    if digits <= 20 {
+        text
+    } else {
+        format!("an integer of {digits} digits")
+    }
+}
+
+/// Extracts an optional non-negative integer keyword with a clear `ValueError`/`TypeError`;
+/// numpy integer scalars are accepted as ints are.
 fn non_negative(value: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Option<u64>> {
     let Some(v) = value.filter(|v| !v.is_none()) else {
         return Ok(None);
     };
-    if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() {
-        return Err(PyTypeError::new_err(format!(
-            "{what} must be an int, got {}",
-            v.get_type().name()?
-        )));
-    }
-    v.extract::<u64>().map(Some).map_err(|_| {
+    let i = index_of(v, what)?;
+    i.extract::<u64>().map(Some).map_err(|_| {
         PyValueError::new_err(format!(
-            "{what} must be a non-negative integer below 2**64, got {v}"
+            "{what} must be a non-negative integer below 2**64, got {}",
+            int_text(&i)
         ))
     })
+}
+
+/// The key path of a configuration value in messages: `filter.resample_threshold`, `terms[2]`.
+fn key_path(path: &str, key: &str) -> String {
+    if path.is_empty() {
+        key.to_owned()
+    } else if key.starts_with('[') {
+        format!("{path}{key}")
+    } else {
+        format!("{path}.{key}")
+    }
+}
+
+/// A copy of a configuration dict made of JSON's own types, each value checked on the way so
+/// that a bad one is named by its key: numpy integers become ints and numpy floats floats; a NaN
+/// or infinity, an integer beyond 64 bits, or a value JSON cannot hold is refused.
+///
+/// # Errors
+/// `ValueError` naming the key for a non-finite number or an integer out of range; `TypeError`
+/// naming the key for a value of another type.
+fn json_value<'py>(v: &Bound<'py, PyAny>, path: &str) -> PyResult<Bound<'py, PyAny>> {
+    use pyo3::types::{PyBool, PyFloat, PyList, PyString, PyTuple};
+    let py = v.py();
+    let at = if path.is_empty() { "config" } else { path };
+    if v.is_none() || v.is_instance_of::<PyBool>() || v.is_instance_of::<PyString>() {
+        return Ok(v.clone());
+    }
+    if let Ok(d) = v.cast::<PyDict>() {
+        let out = PyDict::new(py);
+        for (k, value) in d.iter() {
+            let key: String = k.extract().map_err(|_| {
+                PyTypeError::new_err(format!("config: {at} has a key that is not a string: {k}"))
+            })?;
+            out.set_item(&key, json_value(&value, &key_path(path, &key))?)?;
+        }
+        return Ok(out.into_any());
+    }
+    if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+        let out = PyList::empty(py);
+        for (k, item) in v.try_iter()?.enumerate() {
+            out.append(json_value(&item?, &key_path(path, &format!("[{k}]")))?)?;
+        }
+        return Ok(out.into_any());
+    }
+    let type_name = v.get_type().name()?.to_string();
+    if type_name == "bool_" {
+        return Ok(PyBool::new(py, v.is_truthy()?).to_owned().into_any());
+    }
+    if !v.is_instance_of::<PyFloat>()
+        && let Ok(i) = index_of(v, at)
+    {
+        if i.extract::<i64>().is_err() && i.extract::<u64>().is_err() {
+            return Err(PyValueError::new_err(format!(
+                "config: {at} is out of range (an integer of at most 64 bits), got {}",
+                int_text(&i)
+            )));
+        }
+        return Ok(i.into_any());
+    }
+    if let Ok(x) = v.extract::<f64>()
+        && (v.is_instance_of::<PyFloat>() || type_name.starts_with("float"))
+    {
+        if !x.is_finite() {
+            return Err(PyValueError::new_err(format!(
+                "config: {at} = {x} is not a finite number"
+            )));
+        }
+        return Ok(PyFloat::new(py, x).into_any());
+    }
+    Err(PyTypeError::new_err(format!(
+        "config: {at} is a {type_name}, which a configuration cannot hold (give numbers, \
+         strings, booleans, lists and dicts)"
+    )))
+}
+
+/// The key at a position of `json` (text as `json.dumps(..., indent=1)` writes it, one key per
+/// line): the dotted path of the keys open at line `line` (1-based).
+fn key_at_line(json: &str, line: usize) -> Option<String> {
+    let mut stack: Vec<String> = Vec::new();
+    let mut here = None;
+    for (i, text) in json.lines().enumerate().take(line) {
+        let t = text.trim();
+        let key = t
+            .strip_prefix('"')
+            .and_then(|r| r.split_once("\": "))
+            .map(|(k, _)| k.to_owned());
+        if i + 1 == line {
+            here = key.or_else(|| stack.last().cloned().map(|_| String::new()));
+            break;
+        }
+        if t.ends_with('{') || t.ends_with('[') {
+            stack.push(key.unwrap_or_else(|| "[]".to_owned()));
+        } else if t.starts_with('}') || t.starts_with(']') {
+            stack.pop();
+        }
+    }
+    let mut parts: Vec<String> = stack.into_iter().filter(|k| k != "[]").collect();
+    if let Some(k) = here.filter(|k| !k.is_empty()) {
+        parts.push(k);
+    }
+    (!parts.is_empty()).then(|| parts.join("."))
+}
+
+/// A configuration parser's message made short and pointed at the key: `at line L column C` is
+/// replaced by the key found at that line of `json`.
+fn config_message(message: &str, json: &str) -> String {
+    let Some(pos) = message.find(" at line ") else {
+        return message.to_owned();
+    };
+    let line = message[pos + 9..]
+        .split_whitespace()
+        .next()
+        .and_then(|n| n.parse::<usize>().ok());
+    match line.and_then(|l| key_at_line(json, l)) {
+        Some(key) => format!("{key}: {}", &message[..pos]),
+        None => message.to_owned(),
+    }
 }
 
 /// The configuration a `Tracker(...)` call describes: `track run`'s rules (a preset at
@@ -78,9 +231,19 @@ fn tracker_config(
                 )));
             }
             let c = if config.is_instance_of::<PyDict>() {
-                let json = py.import("json")?.call_method1("dumps", (config,))?;
-                TrackerConfig::parse(&json.extract::<String>()?, ConfigFormat::Json)
-                    .map_err(|e| PyValueError::new_err(format!("config: {e}")))?
+                let clean = json_value(config, "")?;
+                let kwargs = PyDict::new(py);
+                kwargs.set_item("indent", 1)?;
+                let json: String = py
+                    .import("json")?
+                    .call_method("dumps", (clean,), Some(&kwargs))?
+                    .extract()?;
+                TrackerConfig::parse(&json, ConfigFormat::Json).map_err(|e| {
+                    PyValueError::new_err(format!(
+                        "config: {}",
+                        config_message(&e.to_string(), &json)
+                    ))
+                })?
             } else {
                 let path: std::path::PathBuf = config.extract().map_err(|_| {
                     PyTypeError::new_err(format!(
@@ -236,23 +399,37 @@ impl Status {
 ///     `track run` does with colour images; a grey image stays grey (read grey footage with
 ///     `cv2.IMREAD_GRAYSCALE` for the same boxes as `track run`).
 ///
-/// Errors: a frame of another dtype raises TypeError; another shape, an empty frame, a frame
-/// of another size than at `init`, a NaN or infinity in a float frame, or a box outside the
-/// frame raise ValueError; `update` before `init` raises RuntimeError. The GIL is released
-/// while a frame is read and tracked.
+/// `particles` and `seed` take an int or a numpy integer (anything with `__index__`, but not a
+/// bool).
+///
+/// Errors: a frame of another dtype, or an argument of the wrong type, raises TypeError;
+/// another shape, an empty frame, a frame of another size than at `init`, a NaN or infinity in
+/// a float frame, a level outside 0–255 in a float32 frame, a box outside the frame, or a bad
+/// config value (named by its key) raise ValueError; a frame of more than 2**26 pixels raises
+/// MemoryError before anything is allocated; `update` before `init` raises RuntimeError.
+///
+/// Threads: one tracker may be used from several threads. Its calls run one at a time, in the
+/// order they take its lock; a call waits for the lock, and computes, without the GIL, so other
+/// Python threads go on meanwhile. Reading `status` during an `update` in another thread waits
+/// for that update and gives its result.
 ///
 /// Example:
 ///     >>> t = contour_track.Tracker("head", seed=1)
 ///     >>> t.init(frame0, (120, 40, 60, 70))
 ///     >>> ok, (x, y, w, h) = t.update(frame1)
 ///     >>> t.status.p_lost, t.status.ess
-#[pyclass(module = "contour_track")]
+#[pyclass(frozen, module = "contour_track")]
 pub struct Tracker {
-    /// In a mutex only so that the class is `Sync`, as pyo3 requires: every method that uses it
-    /// takes `&mut self` (pyo3's borrow checking), so it is never contended.
-    tracker: std::sync::Mutex<Box<dyn trackers::Tracker>>,
     /// The tracker's configuration, for the getters.
     config: TrackerConfig,
+    /// Everything a call changes, behind one lock: calls from several threads run one at a
+    /// time, in the order they take the lock, each waiting without the GIL.
+    state: std::sync::Mutex<TrackerState>,
+}
+
+/// The mutable part of a [`Tracker`].
+struct TrackerState {
+    tracker: Box<dyn trackers::Tracker>,
     buffers: FrameBuffers,
     /// (width, height) of the frames since `init`.
     size: Option<(usize, usize)>,
@@ -278,21 +455,42 @@ fn parse_box(value: &Bound<'_, PyAny>, what: &str) -> PyResult<BoundingBox> {
     Ok(BoundingBox::new(v[0], v[1], v[2], v[3]))
 }
 
-/// The checks `track run` makes on `--init`: finite, positive size, centre inside the frame.
-fn check_box(b: &BoundingBox, width: usize, height: usize) -> PyResult<()> {
-    let shown = format!("({}, {}, {}, {})", b.x, b.y, b.w, b.h);
+/// A box for a message, each number short ([`fmt_num`]: `1e300`, not 301 digits).
+fn box_text(b: &BoundingBox) -> String {
+    format!(
+        "({}, {}, {}, {})",
+        fmt_num(b.x),
+        fmt_num(b.y),
+        fmt_num(b.w),
+        fmt_num(b.h)
+    )
+}
+
+/// The checks of a box that need no frame: finite, of positive size.
+fn check_finite_box(b: &BoundingBox, what: &str) -> PyResult<()> {
     if !b.is_finite() {
-        return Err(PyValueError::new_err(format!("box {shown} is not finite")));
+        return Err(PyValueError::new_err(format!(
+            "{what} {} is not finite",
+            box_text(b)
+        )));
     }
     if b.w <= 0.0 || b.h <= 0.0 {
         return Err(PyValueError::new_err(format!(
-            "box {shown} has zero or negative size"
+            "{what} {} has zero or negative size",
+            box_text(b)
         )));
     }
+    Ok(())
+}
+
+/// The checks `track run` makes on `--init`: finite, positive size, centre inside the frame.
+fn check_box(b: &BoundingBox, width: usize, height: usize) -> PyResult<()> {
+    check_finite_box(b, "box")?;
     let (cx, cy) = b.centre();
     if cx < 0.0 || cy < 0.0 || cx >= width as f64 || cy >= height as f64 {
         return Err(PyValueError::new_err(format!(
-            "box {shown} lies outside the {width}x{height} frame (its centre is outside)"
+            "box {} lies outside the {width}x{height} frame (its centre is outside)",
+            box_text(b)
         )));
     }
     Ok(())
@@ -314,11 +512,13 @@ impl Tracker {
         let c = tracker_config(py, preset, particles, seed, config)?;
         let tracker = trackers::build(c.clone()).map_err(tracker_error)?;
         Ok(Self {
-            tracker: std::sync::Mutex::new(tracker),
             config: c,
-            buffers: FrameBuffers::default(),
-            size: None,
-            last: None,
+            state: std::sync::Mutex::new(TrackerState {
+                tracker,
+                buffers: FrameBuffers::default(),
+                size: None,
+                last: None,
+            }),
         })
     }
 
@@ -349,16 +549,17 @@ impl Tracker {
         py.import("json")?.call_method1("loads", (json,))
     }
 
-    /// What the tracker reported for its last frame, or None before `init`.
+    /// What the tracker reported for its last frame, or None before `init`. Read during an
+    /// `init` or `update` in another thread, it waits for that call to end.
     #[getter]
-    fn status(&self) -> Option<Status> {
-        self.last.clone()
+    fn status(&self, py: Python<'_>) -> PyResult<Option<Status>> {
+        self.with_state(py, |s| Ok(s.last.clone()))
     }
 
     /// The frame size (width, height) given at `init`, or None before it.
     #[getter]
-    fn frame_size(&self) -> Option<(usize, usize)> {
-        self.size
+    fn frame_size(&self, py: Python<'_>) -> PyResult<Option<(usize, usize)>> {
+        self.with_state(py, |s| Ok(s.size))
     }
 
     /// Starts tracking the box (x, y, w, h) on `frame` (frame 0).
@@ -369,7 +570,7 @@ impl Tracker {
     /// colour frame as RGB instead of OpenCV's BGR.
     #[pyo3(signature = (frame, bbox, *, rgb=false))]
     fn init(
-        &mut self,
+        &self,
         py: Python<'_>,
         frame: &Bound<'_, PyAny>,
         bbox: &Bound<'_, PyAny>,
@@ -379,10 +580,14 @@ impl Tracker {
         let (w, h) = (input.width, input.height);
         let b = parse_box(bbox, "box")?;
         check_box(&b, w, h)?;
-        let estimate = self.run(py, &input, order(rgb), Some(b))?;
-        self.size = Some((w, h));
-        self.last = Some(Status::of(&estimate));
-        Ok(())
+        let view = input.view();
+        let order = order(rgb);
+        self.with_state(py, |s| {
+            let estimate = s.run(&view, order, Some(b))?;
+            s.size = Some((w, h));
+            s.last = Some(Status::of(&estimate));
+            Ok(())
+        })
     }
 
     /// Tracks the target into the next frame; returns `(ok, (x, y, w, h))`.
@@ -392,28 +597,30 @@ impl Tracker {
     /// estimate. The frame must have the size given at `init`.
     #[pyo3(signature = (frame, *, rgb=false))]
     fn update(
-        &mut self,
+        &self,
         py: Python<'_>,
         frame: &Bound<'_, PyAny>,
         rgb: bool,
     ) -> PyResult<(bool, (f64, f64, f64, f64))> {
-        let Some((w0, h0)) = self.size else {
-            return Err(PyRuntimeError::new_err(
-                "the tracker was not initialised: call init(frame, box) first",
-            ));
-        };
         let input = FrameInput::read(frame, "frame")?;
-        if (input.width, input.height) != (w0, h0) {
-            return Err(PyValueError::new_err(format!(
-                "frame is {}x{} but the tracker was initialised on {w0}x{h0} frames",
-                input.width, input.height
-            )));
-        }
-        let estimate = self.run(py, &input, order(rgb), None)?;
-        let status = Status::of(&estimate);
-        let out = (status.ok(), status.bbox);
-        self.last = Some(status);
-        Ok(out)
+        let view = input.view();
+        let order = order(rgb);
+        let (w, h) = (input.width, input.height);
+        self.with_state(py, |s| {
+            let Some((w0, h0)) = s.size else {
+                return Err(FrameError::NotStarted);
+            };
+            if (w, h) != (w0, h0) {
+                return Err(FrameError::Value(format!(
+                    "frame is {w}x{h} but the tracker was initialised on {w0}x{h0} frames"
+                )));
+            }
+            let estimate = s.run(&view, order, None)?;
+            let status = Status::of(&estimate);
+            let out = (status.ok(), status.bbox);
+            s.last = Some(status);
+            Ok(out)
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -426,31 +633,35 @@ impl Tracker {
 }
 
 impl Tracker {
-    /// Reads `input` into the frame the trackers see and runs `init` (with `start`) or `update`,
-    /// without the GIL.
-    fn run(
-        &mut self,
+    /// Runs `f` on the state under the lock, without the GIL: a call from another thread waits
+    /// for the lock while this one computes, and Python threads go on meanwhile.
+    fn with_state<T: Send>(
+        &self,
         py: Python<'_>,
-        input: &FrameInput<'_>,
-        order: ChannelOrder,
-        start: Option<BoundingBox>,
-    ) -> PyResult<Estimate> {
-        let view = input.view();
-        let Self {
-            tracker, buffers, ..
-        } = self;
-        let tracker = tracker
-            .get_mut()
-            .map_err(|_| PyRuntimeError::new_err("the tracker failed in an earlier call"))?;
+        f: impl FnOnce(&mut TrackerState) -> Result<T, FrameError> + Send,
+    ) -> PyResult<T> {
         py.detach(|| {
-            let frame = buffers.frame(&view, order)?;
-            match start {
-                Some(b) => tracker.init(frame, b.inscribed_ellipse()),
-                None => tracker.update(frame),
-            }
-            .map_err(FrameError::Tracker)
+            let mut state = self.state.lock().map_err(|_| FrameError::Poisoned)?;
+            f(&mut state)
         })
         .map_err(PyErr::from)
+    }
+}
+
+impl TrackerState {
+    /// Reads `view` into the frame the trackers see and runs `init` (with `start`) or `update`.
+    fn run(
+        &mut self,
+        view: &frames::FrameView<'_>,
+        order: ChannelOrder,
+        start: Option<BoundingBox>,
+    ) -> Result<Estimate, FrameError> {
+        let frame = self.buffers.frame(view, order)?;
+        match start {
+            Some(b) => self.tracker.init(frame, b.inscribed_ellipse()),
+            None => self.tracker.update(frame),
+        }
+        .map_err(FrameError::Tracker)
     }
 }
 
@@ -459,6 +670,12 @@ impl Tracker {
 enum FrameError {
     /// A bad value in the frame (`ValueError`).
     Value(String),
+    /// A frame too large to allocate its buffers (`MemoryError`).
+    Memory(String),
+    /// `update` before `init` (`RuntimeError`).
+    NotStarted,
+    /// A call panicked while it held the tracker (`RuntimeError`).
+    Poisoned,
     /// The tracker's own error.
     Tracker(trackers::Error),
     /// The motion estimator's error.
@@ -469,6 +686,13 @@ impl From<FrameError> for PyErr {
     fn from(e: FrameError) -> Self {
         match e {
             FrameError::Value(m) => PyValueError::new_err(m),
+            FrameError::Memory(m) => PyMemoryError::new_err(m),
+            FrameError::NotStarted => PyRuntimeError::new_err(
+                "the tracker was not initialised: call init(frame, box) first",
+            ),
+            FrameError::Poisoned => {
+                PyRuntimeError::new_err("the tracker failed in an earlier call")
+            }
             FrameError::Tracker(e) => tracker_error(e),
             FrameError::Motion(e) => PyValueError::new_err(format!("motion estimation: {e}")),
         }
@@ -492,6 +716,9 @@ fn presets() -> Vec<(&'static str, &'static str)> {
 #[pyclass(frozen, module = "contour_track")]
 pub struct Motion {
     estimate: MotionEstimate,
+    /// Why no estimate could be made at all (the normal equations of a region without texture
+    /// are singular), when that is the case: the parameters are then NaN.
+    failure: Option<String>,
 }
 
 #[pymethods]
@@ -588,6 +815,13 @@ impl Motion {
         if self.estimate.reliable {
             return Ok(());
         }
+        if let Some(why) = &self.failure {
+            return Err(UnreliableMotion::new_err(format!(
+                "no {} motion could be estimated ({why}); read .unchecked_params to see them \
+                 (NaN) anyway",
+                self.model()
+            )));
+        }
         Err(UnreliableMotion::new_err(format!(
             "the {} motion estimate is not reliable (converged: {}, inlier fraction {:.3}): its \
              parameters do not describe the region's motion; read .unchecked_params to see them \
@@ -608,6 +842,23 @@ impl Motion {
     }
 }
 
+/// The estimate of a computation that failed: every number NaN, not converged, not reliable.
+fn failed_estimate(spec: ModelSpec) -> MotionEstimate {
+    let n = spec.len();
+    MotionEstimate {
+        spec,
+        params: vec![f64::NAN; n],
+        covariance: vec![f64::NAN; n * n],
+        origin: [f64::NAN; 2],
+        scale: f64::NAN,
+        noise_sigma: f64::NAN,
+        inlier_fraction: 0.0,
+        iterations: Vec::new(),
+        converged: false,
+        reliable: false,
+    }
+}
+
 /// The support region of `estimate_motion`.
 enum Roi {
     Full,
@@ -620,9 +871,25 @@ fn parse_roi(roi: Option<&Bound<'_, PyAny>>, width: usize, height: usize) -> PyR
         return Ok(Roi::Full);
     };
     if let Ok(array) = roi.cast::<PyUntypedArray>()
-        && array.ndim() == 2
+        && array.ndim() >= 2
     {
-        let shape = array.shape();
+        let shape = array.shape().to_vec();
+        // An H×W×1 mask (as OpenCV and Pillow give single-channel images) is read as H×W.
+        if array.ndim() == 3 && shape[2] == 1 {
+            let squeezed = roi.call_method1("squeeze", (2,))?;
+            return parse_roi(Some(&squeezed), width, height);
+        }
+        if array.ndim() != 2 {
+            return Err(PyValueError::new_err(format!(
+                "mask has shape ({}): give an H×W (or H×W×1) mask of the frames' size, or a box \
+                 (x, y, w, h)",
+                shape
+                    .iter()
+                    .map(usize::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
         if (shape[1], shape[0]) != (width, height) {
             return Err(PyValueError::new_err(format!(
                 "mask is {}x{} but the frames are {width}x{height}",
@@ -634,8 +901,8 @@ fn parse_roi(roi: Option<&Bound<'_, PyAny>>, width: usize, height: usize) -> PyR
     let b = parse_box(roi, "roi")?;
     if !b.is_finite() || b.w <= 0.0 || b.h <= 0.0 {
         return Err(PyValueError::new_err(format!(
-            "roi ({}, {}, {}, {}) must be finite with a positive size",
-            b.x, b.y, b.w, b.h
+            "roi {} must be finite with a positive size",
+            box_text(&b)
         )));
     }
     Ok(Roi::Rect(b))
@@ -648,14 +915,18 @@ fn parse_roi(roi: Option<&Bound<'_, PyAny>>, width: usize, height: usize) -> PyR
 ///
 /// Arguments:
 ///     f0, f1: frames of one size, as `Tracker.update` takes them (`rgb=True` for RGB colour).
-///     roi: None (the whole frame), a box (x, y, w, h), or a mask of the frames' H×W: bool,
+///     roi: None (the whole frame), a box (x, y, w, h), or a mask of the frames' H×W (or
+///         H×W×1): bool,
 ///         uint8 (non-zero pixels count, as OpenCV's 0/255 masks) or float weights in [0, 1].
 ///     model: "translation" [tx, ty], "scale" [tx, ty, k] or "affine" [a1..a6] (Odobez Eq. 13:
 ///         dx = a1 + a2·x + a3·y, dy = a4 + a5·x + a6·y, with x, y from `origin`).
 ///     offset: also estimate an intensity offset (last parameter).
 ///
 /// Returns a `Motion`; its `params` raise `UnreliableMotion` when the estimate is not
-/// reliable. Bad frames, masks or boxes raise TypeError or ValueError.
+/// reliable, including when none could be computed (a region without texture, such as constant
+/// frames: the parameters are NaN). Bad frames, masks or boxes raise TypeError or ValueError;
+/// frames of more than 2**26 pixels raise MemoryError before anything is allocated. A mask may
+/// be H×W or H×W×1.
 #[pyfunction]
 #[pyo3(signature = (f0, f1, roi=None, model="affine", *, offset=false, rgb=false))]
 fn estimate_motion(
@@ -700,14 +971,24 @@ fn estimate_motion(
         };
         let estimator =
             MotionEstimator::new(motion_est::Settings::default()).map_err(FrameError::Motion)?;
-        estimator
-            .estimate_images(g0, g1, &region, ModelSpec::new(model, offset), None)
+        let spec = ModelSpec::new(model, offset);
+        match estimator
+            .estimate_images(g0, g1, &region, spec, None)
             // An unreliable estimate is kept: `Motion` makes it impossible to mistake for a
             // good one (its parameters raise `UnreliableMotion`).
             .or_else(motion_est::Error::into_unreliable)
-            .map_err(FrameError::Motion)
+        {
+            Ok(estimate) => Ok((estimate, None)),
+            // A region without texture (constant frames) has no motion to estimate: a failed
+            // computation, not a bad argument, reported as an unreliable estimate.
+            Err(e @ motion_est::Error::Degenerate { .. }) => {
+                Ok((failed_estimate(spec), Some(e.to_string())))
+            }
+            Err(e) => Err(FrameError::Motion(e)),
+        }
     })?;
-    Ok(Motion { estimate })
+    let (estimate, failure) = estimate;
+    Ok(Motion { estimate, failure })
 }
 
 /// The Rust side of `bench/bench_overhead.py`: tracks RGB frames the way `track run` feeds a
@@ -785,6 +1066,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(presets, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_motion, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_update_times, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::_track_video, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::_otb_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::_otb_run, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::_otb_score, m)?)?;
     m.add("UnreliableMotion", m.py().get_type::<UnreliableMotion>())?;
     m.add("DEFAULT_TRACKER", DEFAULT_TRACKER)?;
     Ok(())

@@ -74,3 +74,28 @@ def track_bin():
 def clip():
     """Twelve generated RGB frames."""
     return [scene(k) for k in range(12)]
+
+
+def write_clip(folder, frames):
+    """Writes frames as an image folder (0001.png, 0002.png, …); returns the folder."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for k, f in enumerate(frames):
+        write_png(folder / f"{k + 1:04d}.png", f)
+    return folder
+
+
+def write_otb(folder, frames, truth):
+    """Writes an OTB folder: img/0001.png, … and groundtruth_rect.txt (one x,y,w,h per frame,
+    0,0,0,0 for None); returns the folder."""
+    folder = Path(folder)
+    write_clip(folder / "img", frames)
+    lines = ["0,0,0,0" if b is None else ",".join(f"{v:g}" for v in b) for b in truth]
+    (folder / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n")
+    return folder
+
+
+def scene_truth(k, centre=(50.0, 55.0), radii=(18.0, 22.0)):
+    """The box of frame k's ellipse in `scene`."""
+    cx, cy = centre[0] + 2.0 * k, centre[1] + 1.0 * k
+    return (cx - radii[0], cy - radii[1], 2 * radii[0], 2 * radii[1])

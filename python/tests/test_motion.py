@@ -55,8 +55,9 @@ def test_colour_frames_and_offset():
 def test_unreliable_estimate_cannot_be_mistaken_for_a_good_one(seed, model):
     # Two frames of independent noise: no motion maps one onto the other.
     rng = np.random.default_rng(seed)
-    f0 = (128 + rng.normal(0, 30, (96, 128))).astype(np.float32)
-    f1 = (128 + rng.normal(0, 30, (96, 128))).astype(np.float32)
+    # Grey levels in 0–255, as float32 grey frames must hold.
+    f0 = np.clip(128 + rng.normal(0, 30, (96, 128)), 0, 255).astype(np.float32)
+    f1 = np.clip(128 + rng.normal(0, 30, (96, 128)), 0, 255).astype(np.float32)
     m = ct.estimate_motion(f0, f1, model=model)
     assert not m.reliable and not bool(m)
     for attribute in ["params", "covariance", "affine"]:
