@@ -9,6 +9,7 @@ mod messages;
 mod motion_failures;
 mod otb_protocols;
 mod outputs;
+mod readme_examples;
 mod real_footage;
 mod reliability;
 mod silent_results;
