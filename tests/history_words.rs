@@ -64,11 +64,7 @@ fn files(dir: &Path, out: &mut Vec<PathBuf>) {
             if !skipped(&path) {
                 files(&path, out);
             }
-        } else if kind.is_file()
-            && path
-                .extension()
-                .is_some_and(|e| e == "md" || e == "rs")
-        {
+        } else if kind.is_file() && path.extension().is_some_and(|e| e == "md" || e == "rs") {
             out.push(path);
         }
     }
@@ -114,8 +110,8 @@ fn no_markdown_file_or_doc_comment_names_a_work_item() {
     );
     let mut found = Vec::new();
     for path in &all {
-        let text = std::fs::read_to_string(path)
-            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let text =
+            std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let rust = path.extension().is_some_and(|e| e == "rs");
         for (k, line) in text.lines().enumerate() {
             if (!rust || is_doc_comment(line)) && names_a_work_item(line) {

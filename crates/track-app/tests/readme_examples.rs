@@ -14,7 +14,12 @@ use std::process::Command;
 use crate::common::TRACK;
 
 /// The documents whose runnable blocks are run.
-const DOCUMENTS: [&str; 4] = ["README.md", "CONTRIBUTING.md", "docs/CLI.md", "docs/PYTHON.md"];
+const DOCUMENTS: [&str; 4] = [
+    "README.md",
+    "CONTRIBUTING.md",
+    "docs/CLI.md",
+    "docs/PYTHON.md",
+];
 
 /// The repository's root.
 fn root() -> PathBuf {
@@ -64,7 +69,12 @@ fn generate_clips(markdown: &str, dir: &Path) {
             let Some(args) = line.trim().strip_prefix("cargo xtask gen-clutter ") else {
                 continue;
             };
-            let args: Vec<&str> = args.split('#').next().unwrap_or("").split_whitespace().collect();
+            let args: Vec<&str> = args
+                .split('#')
+                .next()
+                .unwrap_or("")
+                .split_whitespace()
+                .collect();
             let value = |flag: &str| {
                 args.iter()
                     .position(|a| *a == flag)
@@ -129,8 +139,14 @@ fn run_document(name: &str) -> usize {
 #[test]
 fn the_documents_runnable_shell_blocks_run() {
     let counts: Vec<(&str, usize)> = DOCUMENTS.iter().map(|d| (*d, run_document(d))).collect();
-    let readme = counts.iter().find(|(d, _)| *d == "README.md").map_or(0, |c| c.1);
-    assert!(readme >= 1, "the README has runnable shell blocks: {counts:?}");
+    let readme = counts
+        .iter()
+        .find(|(d, _)| *d == "README.md")
+        .map_or(0, |c| c.1);
+    assert!(
+        readme >= 1,
+        "the README has runnable shell blocks: {counts:?}"
+    );
 }
 
 #[test]
