@@ -1,6 +1,6 @@
 """The Python examples of the documents run as written: every fenced block whose info string is
-`python runnable` in README.md, CONTRIBUTING.md and docs/*.md is executed, each in a fresh
-temporary working folder, with the installed contour_track package."""
+`python runnable` in README.md, CONTRIBUTING.md, docs/CLI.md and docs/PYTHON.md is executed, each
+in a fresh temporary working folder, with the installed contour_track package."""
 
 import os
 import re
