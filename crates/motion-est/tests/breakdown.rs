@@ -424,7 +424,7 @@ fn full_frame_breakdown_grid() {
         region: [0, 0, 320, 240],
     };
     // 35 and 45 % of the 76 800 pixels: no failure up to 35 %, at most 1 in 8 at 45 % (the
-    // issue's bounds). Full-frame estimates that need a re-start take ~0.1 s in the test
+    // bounds). Full-frame estimates that need a re-start take ~0.1 s in the test
     // profile: by default one texture draw per block size (each size its own, each run its own
     // noise); `BREAKDOWN_FULL=1` runs two per size and adds 25 % (0 failures measured).
     let full = std::env::var_os("BREAKDOWN_FULL").is_some();
