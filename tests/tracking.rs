@@ -158,7 +158,7 @@ fn motion_proposal_survives_abrupt_motion_that_breaks_tight_condensation() {
 fn reacquisition_finds_the_target_after_a_full_occlusion() {
     // The frames after the last (almost) fully hidden one where the target is more than 80 %
     // visible again. Without the reacquisition jump every preset scores 0 there for every seed
-    // (docs/RESULTS.md); with it w-eval measured 0.80, 0.79, 0.89, 0.78 over seeds 1–4 (mean
+    // (docs/DECISIONS.md); with it w-eval measured 0.80, 0.79, 0.89, 0.78 over seeds 1–4 (mean
     // 0.81), and 0.905, 0.783, 0.906, 0.902 (mean 0.874) since its occlusion arc. The threshold
     // on the mean over the four seeds is 0.6: one seed that stays lost would leave at most 0.6.
     let clip = clip(Scenario::Occlusion, 120);

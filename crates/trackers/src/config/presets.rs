@@ -253,7 +253,7 @@ impl Preset {
                     clutter_line_fraction: CLUTTER_LINE_FRACTION,
                     shape: None,
                     // Not the arc: with it, Table 1's S2 column (100 particles) fell below
-                    // the 95 % target for full (docs/RESULTS.md).
+                    // the 95 % target for full (docs/DECISIONS.md).
                     occlusion_form: OcclusionForm::Independent {
                         unknown_occluder_share: UNKNOWN_OCCLUDER_SHARE,
                     },
