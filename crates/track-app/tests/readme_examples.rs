@@ -151,7 +151,11 @@ fn the_documents_runnable_shell_blocks_run() {
 
 #[test]
 fn blocks_and_markers_are_read_as_written() {
-    let md = "text\n```sh runnable\ntrack demo\n```\n```sh\ncargo build\n```\n```python runnable\nx = 1\n```\n";
+    let md = concat!(
+        "text\n```sh runnable\ntrack demo\n```\n",
+        "```sh\ncargo build\n```\n",
+        "```python runnable\nx = 1\n```\n"
+    );
     let b = blocks(md);
     assert_eq!(b.len(), 3);
     assert_eq!(b[0], ("sh runnable".to_owned(), "track demo\n".to_owned()));
