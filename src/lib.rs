@@ -20,7 +20,7 @@ pub use trackers;
 #[doc(inline)]
 pub use vision_core;
 
-// The Rust code in the top-level README and in the README of motion-est (whose sources this
+// Any Rust code in the top-level README, and the README of motion-est (whose sources this
 // crate does not own) is compiled and run as doctests of this crate.
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]

@@ -191,7 +191,7 @@ fn configuration_with_nan_or_a_bad_matrix_is_rejected() {
         s(&img),
         &["--init", "14,20,32,32", "--config", s(&broken)],
     );
-    // Issue 17: a configuration file is a setting, so one that does not parse is exit 2, like one
+    // A configuration file is a setting, so one that does not parse is exit 2, like one
     // with a value out of range (it was 3).
     assert_eq!(err.exit_code(), 2);
     assert!(err.to_string().contains("broken.json"), "{err}");

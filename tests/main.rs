@@ -4,5 +4,6 @@
 mod bad_input;
 mod cli;
 mod common;
+mod history_words;
 mod self_evaluation;
 mod tracking;

@@ -1,4 +1,4 @@
-//! The paper trackers' self-evaluation α̂ on frames with no target (issue 17, item 9): on pure
+//! The paper trackers' self-evaluation α̂ on frames with no target: on pure
 //! noise and on a static checkerboard, `full` must not claim the track is locked, while on a
 //! scene with a target it still says locked. Several noise draws and tracker seeds each.
 

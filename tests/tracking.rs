@@ -158,7 +158,7 @@ fn motion_proposal_survives_abrupt_motion_that_breaks_tight_condensation() {
 fn reacquisition_finds_the_target_after_a_full_occlusion() {
     // The frames after the last (almost) fully hidden one where the target is more than 80 %
     // visible again. Without the reacquisition jump every preset scores 0 there for every seed
-    // (docs/RESULTS.md); with it w-eval measured 0.80, 0.79, 0.89, 0.78 over seeds 1–4 (mean
+    // (docs/DECISIONS.md); with it w-eval measured 0.80, 0.79, 0.89, 0.78 over seeds 1–4 (mean
     // 0.81), and 0.905, 0.783, 0.906, 0.902 (mean 0.874) since its occlusion arc. The threshold
     // on the mean over the four seeds is 0.6: one seed that stays lost would leave at most 0.6.
     let clip = clip(Scenario::Occlusion, 120);
@@ -224,7 +224,7 @@ fn assert_rise_and_fall(preset: Preset, seeds: std::ops::RangeInclusive<u64>) {
 
 #[test]
 fn occlusion_estimate_rises_while_hidden_and_falls_after() {
-    // Issue 7: w-occ's γ̂ rises during the occlusion and falls after it. Both occlusion presets
+    // w-occ's γ̂ rises during the occlusion and falls after it. Both occlusion presets
     // read γ as the hidden fraction of the contour, hidden as one arc whose lines all score one
     // constant (`contour_obs::OcclusionForm::NeutralArc`), so "whole contour
     // at the true pose, partly hidden" beats "shrunk onto the visible sliver", the hidden target
@@ -274,7 +274,7 @@ fn head_follows_a_target_that_zooms_out_and_back() {
     // to 20 px and back to 32 px. Held-out footage had targets that zoom; a pull of the size
     // towards a remembered one (`dynamics.shape_reversion` 0.05, which gains on the development
     // set) fails here: the box stays near 43 px while the target is 20 px, mean IoU 0.48 on
-    // seed 1 (docs/RESULTS.md, decision log). `head`'s mean IoU: 0.82, 0.83, 0.81.
+    // seed 1 (docs/DECISIONS.md). `head`'s mean IoU: 0.82, 0.83, 0.81.
     let mut p = ScenarioParams::preset(Scenario::Zoom);
     p.frames = 200;
     let changes = p.scale_changes.as_mut().unwrap();

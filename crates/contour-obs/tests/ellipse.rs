@@ -107,7 +107,7 @@ fn edge_offsets_within_a_quarter_pixel_of_the_true_boundary() {
             }
         }
     }
-    // 0.25 px is the bound; an area-sampled boundary read by bilinear interpolation
+    // 0.25 px is the bound; an area-sampled boundary read by bilinear interpolation
     // along oblique lines and a parabola vertex stay well inside it.
     assert!(worst < 0.25, "worst offset error {worst}");
     assert!(checked >= 100, "only {checked} crossings checked");

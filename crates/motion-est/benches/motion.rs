@@ -1,4 +1,4 @@
-//! Motion estimation cost (issue 3): pyramid build, and one estimate per region size and model,
+//! Motion estimation cost: pyramid build, and one estimate per region size and model,
 //! including the pyramids of both frames, on a 320×240 synthetic pair.
 #![allow(missing_docs)]
 

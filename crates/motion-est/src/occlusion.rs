@@ -1,4 +1,4 @@
-//! Occlusion between two motions found in one region (issue 16): which one is behind, and the
+//! Occlusion between two motions found in one region: which one is behind, and the
 //! pixels it loses to the one in front.
 //!
 //! When a surface moves over another inside the region, the pixels of the surface behind that the

@@ -1,5 +1,5 @@
 //! Starting motions for the re-start of an estimate that could not separate the dominant motion
-//! (issue 16): block matching on a tiling of the region, then the affine motions that the most
+//! — block matching on a tiling of the region, then the affine motions that the most
 //! blocks agree on.
 //!
 //! When a motion covers 35–50 % of the region, the coarse levels see a blur of the two motions

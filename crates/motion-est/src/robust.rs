@@ -181,7 +181,7 @@ pub(crate) fn lower_quartile(res: &[f32], valid: &[u8], scratch: &mut Vec<f32>) 
 /// groups of different spread: the noise of the pixels that fit, and larger ones that take in
 /// outliers and misfit. Started below the noise (the lower quartile is below the inliers' own
 /// scale as long as they are more than a quarter of the pixels), it climbs to the smallest fixed
-/// point, the noise; started from the median (as before issue 16) it may settle on an inflated one.
+/// point, the noise; started from the median alone it may settle on an inflated one.
 ///
 /// With `seed` (a scale from residuals that differ little, e.g. the previous iteration's at the
 /// same level) the quantile is skipped and the refinement starts from the seed: the refinement has

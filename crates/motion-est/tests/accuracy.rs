@@ -1,9 +1,9 @@
-//! Accuracy against exact ground truth (issue 3): synthetic 8-bit pairs whose warp is known
-//! exactly, σ = 2 grey-level noise, mean corner error of the region below the issue's bounds.
+//! Accuracy against exact ground truth: synthetic 8-bit pairs whose warp is known
+//! exactly, σ = 2 grey-level noise, mean corner error of the region below the accuracy bounds.
 //!
 //! Each case averages the mean corner error over three independent noise draws, so that a bound is
 //! checked against the estimator's typical error rather than one lucky or unlucky draw; the
-//! per-draw spread is about ±40 % of the mean (noise-limited estimates), and the issue's bounds are
+//! per-draw spread is about ±40 % of the mean (noise-limited estimates), and the bounds are
 //! the original implementation's own figures, so no extra tolerance is added.
 #![allow(missing_docs)]
 
@@ -146,13 +146,13 @@ fn region_64_affine() {
 
 // The 64×64 region with a 39 % independent block, formerly one configuration on one texture draw
 // (0.021 px, a lucky draw: 4 of 5 fresh draws failed), is covered by `tests/breakdown.rs` over
-// positions, motions, textures and draws (issue 16).
+// positions, motions, textures and draws.
 
 #[test]
 fn tracking_preset_accuracy() {
     // The tracking preset stops at 0.01 px steps instead of 5e-4 px; Gauss–Newton converges
     // quadratically near the optimum, so the last accepted step is already far below the noise
-    // limit and the issue's own bounds must still hold.
+    // limit and the accuracy bounds must still hold.
     let t = Settings::tracking();
     let e = run_with(&full_frame([3.0, -2.0], 0.0, None, false), 2, 1, t, None);
     eprintln!("tracking, full frame: {e:.5}");
@@ -165,7 +165,7 @@ fn tracking_preset_accuracy() {
 #[test]
 fn warm_start_from_a_nearby_guess() {
     // A guess 1.2 px off in translation and 1 % off in the linear part: with two levels the
-    // estimate must reach the same accuracy as the cold start (the issue's 64×64 bound).
+    // estimate must reach the same accuracy as the cold start (the 64×64 bound).
     let case = region_case(None);
     let a = case.warp.a;
     let guess = [a[0] - 1.0, a[1] + 0.01, a[2], a[3] + 0.7, a[4], a[5] - 0.01];

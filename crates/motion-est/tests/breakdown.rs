@@ -1,4 +1,4 @@
-//! Breakdown point of the robust estimator (issue 16): a background moving by a known affine
+//! Breakdown point of the robust estimator: a background moving by a known affine
 //! motion (2° rotation, 3 % scale, slight shear, translation (3, −2) about the region's centre)
 //! with a square block of another texture, or of the same texture, translating on its own, over a
 //! grid of block positions (corner, edge, centre of the region), relative motions of the block
@@ -7,7 +7,7 @@
 //!
 //! A fit *fails* when the mean corner error of the region against the background's motion is
 //! above 0.5 px (failures are typically several pixels: a compromise between the two motions or
-//! the block's motion). The issue's bounds: in a 64×64 region no failure up to 39 % of the area
+//! the block's motion). The bounds: in a 64×64 region no failure up to 39 % of the area
 //! and at most 1 in 12 at 47 %; on the full 320×240 frame no failure up to 35 % and at most 1 in 8
 //! at 45 %. A flagged estimate (`MotionEstimate::reliable == false`) counts as a failure too:
 //! the tracker discards it.
@@ -398,7 +398,7 @@ fn check_grid(scene: &Scene, label: &str, cases: &[(usize, f64)], seed: u64, dra
 
 #[test]
 fn region_64_breakdown_grid() {
-    // 25, 32 and 39 % of the 4096 pixels: no failure; 47 %: at most 1 in 12 (the issue's bounds).
+    // 25, 32 and 39 % of the 4096 pixels: no failure; 47 %: at most 1 in 12 (the bounds).
     // At 47 % a different texture moving by 5–10 px relative to the background explains more
     // pixels than the background, whose pixels that the block covers in the second frame fit no
     // motion; the estimator counts those for the background, the surface behind (see
@@ -424,7 +424,7 @@ fn full_frame_breakdown_grid() {
         region: [0, 0, 320, 240],
     };
     // 35 and 45 % of the 76 800 pixels: no failure up to 35 %, at most 1 in 8 at 45 % (the
-    // issue's bounds). Full-frame estimates that need a re-start take ~0.1 s in the test
+    // bounds). Full-frame estimates that need a re-start take ~0.1 s in the test
     // profile: by default one texture draw per block size (each size its own, each run its own
     // noise); `BREAKDOWN_FULL=1` runs two per size and adds 25 % (0 failures measured).
     let full = std::env::var_os("BREAKDOWN_FULL").is_some();

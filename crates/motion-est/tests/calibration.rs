@@ -1,4 +1,4 @@
-//! Covariance calibration (issue 3): over 30 noise draws (σ = 2 grey levels), the empirical RMS of
+//! Covariance calibration: over 30 noise draws (σ = 2 grey levels), the empirical RMS of
 //! the region's four corner-displacement errors must be within 0.8–1.25× of the RMS predicted from
 //! the estimated covariance, for the full frame and for a 64×64 region.
 //!

@@ -64,7 +64,7 @@ fn full_frame_estimate_is_bit_identical_with_one_or_two_threads() {
         let two = in_pool(2, run);
         let four = in_pool(4, run);
         // The scale model cannot represent the pair's 2° rotation: its misfit exceeds the weights'
-        // scale ceiling (issue 16) and IRLS need not converge; only the bits matter here.
+        // scale ceiling and IRLS need not converge; only the bits matter here.
         if spec.model == MotionModel::Affine {
             assert!(one.converged, "{spec:?}: {one:?}");
         }

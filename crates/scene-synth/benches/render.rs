@@ -1,4 +1,4 @@
-//! Rendering speed: frames per second at 320×240 for every scenario (the issue asks ≥ 200).
+//! Rendering speed: frames per second at 320×240 for every scenario (the target is ≥ 200).
 //! Scene construction (calibration, textures, trajectory) happens once, outside the timing.
 // `criterion_group!` generates an undocumented public function.
 #![allow(missing_docs)]

@@ -118,7 +118,7 @@ pub use smooth::{
 mod readme_tests {
     /// The README's example compiles as a doctest against this crate's own `rand`, whatever an
     /// application's `cargo add rand` picks; it only holds for a user if the example imports the
-    /// generator traits through the re-exports, which this checks (issue 28).
+    /// generator traits through the re-exports, which this checks.
     #[test]
     fn the_examples_import_rand_through_the_re_exports() {
         for (name, text) in [

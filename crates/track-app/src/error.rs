@@ -7,7 +7,7 @@ pub type Result<T, E = AppError> = std::result::Result<T, E>;
 
 /// Everything that can stop a `track` command. Each variant names the file or value at fault.
 ///
-/// Exit codes (also in `track --help` and the README's table): 0 success, 1 a computation failed
+/// Exit codes (also in `track --help` and docs/CLI.md's table): 0 success, 1 a computation failed
 /// (for example the filter degenerated, or `track motion` found no reliable motion), 2 bad
 /// command-line arguments or settings — a `--config` file included, whether it does not parse or
 /// holds a value out of range —, 3 bad input data (images, ground truth, video, ffmpeg missing

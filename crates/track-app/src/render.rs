@@ -445,7 +445,7 @@ pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
 pub enum OverlayFormat {
     /// Lossless PNG at the `image` crate's fast compression level: the stronger levels make
     /// overlays of footage only a few percent smaller for many times the time
-    /// (docs/RESULTS.md, "Output sizes").
+    /// (docs/RESULTS.md, "Input and output").
     #[default]
     Png,
     /// JPEG at quality [`JPEG_QUALITY`]: several times smaller, lossy.

@@ -1,4 +1,4 @@
-//! Issue 24, "a configuration names the pieces it uses and nothing else": `track config` prints
+//! A configuration names the pieces it uses and nothing else: `track config` prints
 //! only what each preset's tracker reads and the file loads back as the preset; a file that sets
 //! an unread setting, and `--edge-threshold` for a tracker without measurement lines, are refused
 //! by name with exit 2; the files of the previous release (tests/fixtures/old_configs, written

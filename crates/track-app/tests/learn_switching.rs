@@ -1,4 +1,4 @@
-//! Learning the switching parameters by EM on smoothed runs (issue 19): on a long synthetic
+//! Learning the switching parameters by EM on smoothed runs: on a long synthetic
 //! sequence the learnt T_β matches the transition frequencies of the generator's true β sequence.
 
 use crate::common;

@@ -11,6 +11,7 @@ mod motion_failures;
 mod otb_protocols;
 mod output_guard;
 mod outputs;
+mod readme_examples;
 mod real_footage;
 mod reliability;
 mod silent_results;

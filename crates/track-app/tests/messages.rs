@@ -1,5 +1,5 @@
-//! Issue 17, item 6: wrong or misleading messages. Each error names the option or the file at
-//! fault, says what is wrong in one short line, and has the exit code of the README's table
+//! Wrong or misleading messages. Each error names the option or the file at
+//! fault, says what is wrong in one short line, and has the exit code of docs/CLI.md's table
 //! (2 arguments and settings, `--config` files included; 3 input data; 4 outputs).
 
 use crate::common;
@@ -104,7 +104,7 @@ fn configuration_files_that_do_not_parse_or_hold_bad_values_are_both_exit_2() {
     let good: serde_json::Value = serde_json::from_slice(&track(&["config", "m1"]).stdout).unwrap();
     let mut zero = good.clone();
     zero["particles"] = 0.into();
-    // Issue 28: a translation noise that passed validation and failed at frame 1 ("estimated
+    // A translation noise that passed validation and failed at frame 1 ("estimated
     // contour is not finite") is refused up front, by its dotted path and range.
     let mut wild = good.clone();
     wild["dynamics"]["sigma_translation"] = 1e308.into();

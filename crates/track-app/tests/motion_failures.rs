@@ -1,4 +1,4 @@
-//! Issue 17, item 8: `track motion` never presents a failed estimate as a result. An origin far
+//! `track motion` never presents a failed estimate as a result. An origin far
 //! from the frames is refused up front (exit 2); an estimate that did not converge, that
 //! motion-est flags unreliable, or whose covariance is not a covariance is a failure: exit 1, an
 //! error line, no parameters or standard deviations on standard output, and with `--json` an
@@ -125,7 +125,7 @@ fn a_covariance_that_is_not_positive_semi_definite_is_never_reported() {
         )
         .unwrap();
     assert_eq!(track_app::commands::motion::assess(&est), Ok(()));
-    // The diagonal of the issue's report: −2.75.
+    // The diagonal of the reported case: −2.75.
     let mut negative = est.clone();
     negative.covariance[0] = -2.75;
     let reason = track_app::commands::motion::assess(&negative).unwrap_err();

@@ -1,4 +1,4 @@
-//! Issue 25: `track eval otb --protocol ope|tre|sre` on generated OTB folders: the runs start
+//! `track eval otb --protocol ope|tre|sre` on generated OTB folders: the runs start
 //! where `opencv_peers.py` starts them, the start frame is never scored, `--results` reads other
 //! trackers' boxes (and round-trips `track run`'s `boxes.txt`), and the results do not depend on
 //! the number of threads.

@@ -1,4 +1,4 @@
-//! Issue 28, "outputs people can read": what the overlays, the GIF and the report of `track run`
+//! Outputs people can read: what the overlays, the GIF and the report of `track run`
 //! show, on the disc frames of [`common::disc_frames`].
 
 use crate::common;

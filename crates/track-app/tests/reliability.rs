@@ -1,4 +1,4 @@
-//! Issue 17, items 1–5: outputs never replace what is not a regular file, sizes that cannot fit
+//! Outputs never replace what is not a regular file, sizes that cannot fit
 //! are refused before anything is allocated, a closed or full standard output is handled, a run
 //! stops cleanly on a signal, and Y4M on standard input is streamed.
 //!

@@ -1,4 +1,4 @@
-//! Issue 17, item 7: silent wrong results. Frames are read in natural order, `--init-ellipse`
+//! Silent wrong results. Frames are read in natural order, `--init-ellipse`
 //! starts the tracker from the ellipse given (or is refused), a zero-size first box is an error,
 //! and `track.csv` has the same columns whatever the number of frames.
 

@@ -1,4 +1,4 @@
-//! `track run --smooth` (issue 19): smoothed estimates written beside the filtered ones.
+//! `track run --smooth`: smoothed estimates written beside the filtered ones.
 
 use crate::common;
 

@@ -1,4 +1,4 @@
-//! `track` never deletes or overwrites a file it did not write (issue 28, items 1–6): links in
+//! `track` never deletes or overwrites a file it did not write: links in
 //! the output folder, an output folder that holds the input, two runs into one folder, the
 //! temporaries of a killed run, and a signal before tracking begins. These run the binary, as a
 //! user would.

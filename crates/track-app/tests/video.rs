@@ -1,4 +1,4 @@
-//! Issue 17, video files: `track run clip.mp4` decodes the file with ffmpeg through a pipe, frame
+//! Video files: `track run clip.mp4` decodes the file with ffmpeg through a pipe, frame
 //! size and rate from the file, ffmpeg's errors in the message, a clear error when ffmpeg is
 //! missing, and no ffmpeg process left behind.
 //!

@@ -1,4 +1,4 @@
-//! The library as a user adds it (issue 28, "The library a user adds"): everything a tracker
+//! The library as a user adds it: everything a tracker
 //! reports is named through `trackers` alone, image-crate images become frames, a rotated
 //! ellipse is refused by trackers of axis-aligned ones, and frame errors name the right frame.
 

@@ -1,4 +1,4 @@
-//! Smoothing a recorded run (`Tracker::smoothed`, issue 19): the smoothed estimates cover every
+//! Smoothing a recorded run (`Tracker::smoothed`): the smoothed estimates cover every
 //! updated frame, the last one is the filter's own, and a tracker that records nothing says so.
 
 use trackers::{Frame, Preset, SmootherSettings, TrackerConfig, build};

@@ -19,7 +19,7 @@ use crate::{LineTerms, log_poisson, occlusion_line_log};
 /// which hides the clutter on the inner part of the line, so a pose whose line crosses a
 /// texture with many edges is less probable than the same line without the target
 /// (f^m, f the clutter share). This is what the plain ratio at a single λ lacked (an
-/// edge-rich texture was a honeypot through Eq. 5's m(L)/μ, docs/RESULTS.md).
+/// edge-rich texture was a honeypot through Eq. 5's m(L)/μ, docs/DECISIONS.md).
 pub(crate) fn log_ratio_line(
     t: LineTerms,
     edges: usize,

@@ -368,7 +368,7 @@ impl UVectors<'_> {
                 if self.valid[k] == 0 {
                     continue;
                 }
-                // Only pixels that stay in the image count (issue 16).
+                // Only pixels that stay in the image count.
                 m_all += f64::from(self.m[k]);
                 let z = f64::from(self.res[k]) / s;
                 if z.abs() < c {

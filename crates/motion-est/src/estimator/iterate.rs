@@ -115,7 +115,7 @@ impl MotionEstimator {
                 // A coarse level whose steps stopped shrinking has reached the precision its
                 // pixels allow (pixels crossing the window's border and Tukey's threshold move
                 // the fit back and forth by about the step): further iterations cycle up to the
-                // cap (issue 16), and the next level only needs a start within its basin.
+                // cap, and the next level only needs a start within its basin.
                 if step < least {
                     (least, since) = (step, 0);
                 } else {
@@ -129,7 +129,7 @@ impl MotionEstimator {
         run
     }
 
-    /// Several starting hypotheses at a cold start's first level (issue 16): the translations of
+    /// Several starting hypotheses at a cold start's first level: the translations of
     /// a grid of ±[`START_RADIUS`] level pixels around `theta` are ranked by the lower quartile of
     /// |DFD| (small where a group of pixels fits), the best [`START_HYPOTHESES`] distinct ones
     /// are each refined by the translation-only Gauss–Newton with the noise scale, and the one

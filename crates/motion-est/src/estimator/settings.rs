@@ -55,7 +55,7 @@ pub struct Settings {
     /// Ceiling on the scale of the IRLS weights at the two finest levels, grey levels (default
     /// 8 / 4.6851 ≈ 1.71: with Tukey's c, pixels whose DFD exceeds 8 grey levels get no weight, the
     /// fixed constant of Motion2D). Without it the scale measured at a compromise between two
-    /// motions grows with the misfit (4–20 grey levels) and keeps the compromise (issue 16). It
+    /// motions grows with the misfit (4–20 grey levels) and keeps the compromise. It
     /// only acts when the noise scale exceeds it (σ ≳ 4 grey levels per frame with pre-smoothing);
     /// the reported scale, inlier fraction and covariance always use the noise scale.
     #[serde(default = "default_max_scale")]

@@ -337,7 +337,7 @@ fn lane_normal_equations_match_a_scalar_f64_reference() {
 #[test]
 fn pixels_leaving_the_image_are_dropped() {
     // A 4 px shift to the right: the last 4 columns of frame 0 have no match in frame 1 and
-    // count neither as inliers nor in the total (issue 16: the fraction is over the pixels
+    // count neither as inliers nor in the total (the fraction is over the pixels
     // that stay in the image), so a pure shift reads close to 1. Noise-free, the robust scale
     // is tiny, so a few columns next to the clamped image border fall outside c·σ̂: allow up
     // to 8 columns.

@@ -83,7 +83,7 @@ impl Affine {
         ]
     }
 
-    /// The issue's full-frame motion: 2° rotation, 3 % scale, slight shear, translation `t`.
+    /// The full-frame test motion: 2° rotation, 3 % scale, slight shear, translation `t`.
     pub fn issue(origin: [f64; 2], t: [f64; 2]) -> Self {
         let (s, c) = 2.0f64.to_radians().sin_cos();
         let k = 1.03;

@@ -11,7 +11,7 @@ mod checks;
 
 use checks::{bad, finite};
 
-/// The named scenario presets (issue 6).
+/// The named scenario presets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Scenario {

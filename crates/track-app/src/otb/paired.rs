@@ -4,7 +4,7 @@
 //! of the paired differences of its success AUC is positive (negative) by a one-sided t-test at
 //! the given level. Pairing removes what the seeds share; the test asks for a difference larger
 //! than the sequence's own seed-to-seed noise, so a small gain repeated on every seed counts and
-//! one lucky seed on a volatile sequence does not (docs/RESULTS.md, "Deciding what helps").
+//! one lucky seed on a volatile sequence does not (the rule of docs/DECISIONS.md).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

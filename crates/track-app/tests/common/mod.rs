@@ -1,4 +1,4 @@
-//! Helpers shared by the end-to-end tests of issue 17's items 6–8 and of video files: run the
+//! Helpers shared by the end-to-end tests of messages, failures and video files: run the
 //! `track` binary as a user would and read what it wrote.
 #![allow(dead_code)]
 

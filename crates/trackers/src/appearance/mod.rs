@@ -57,7 +57,7 @@ pub struct AppearanceSettings {
     pub template_weight: f64,
     /// Weight of the contour contrast, nats per unit (default 0: the term is off). Measured on
     /// the real development set under TRE and SRE, a weight of 1 helped no sequence and cost up
-    /// to two (docs/RESULTS.md, decision log), so `head` leaves it out; it stays a term a
+    /// to two (docs/DECISIONS.md), so `head` leaves it out; it stays a term a
     /// configuration can turn on.
     pub contour_weight: f64,
     /// Samples across the template's disc, a grid of this many squared clipped to the disc
@@ -106,17 +106,17 @@ pub struct AppearanceSettings {
     pub max_window_pixels: usize,
     /// Whether the whole frame, instead of the window around the last estimate, is read while
     /// the lock chain says the target is lost, so that the detection where reacquisition draws
-    /// looks everywhere (default false). Measured on the real development set (docs/RESULTS.md,
-    /// decision log), the whole frame found two sequences' targets again (a fast-moving baby,
+    /// looks everywhere (default false). Measured on the real development set (docs/DECISIONS.md,
+    /// `head` tables), the whole frame found two sequences' targets again (a fast-moving baby,
     /// a girl turning round) and lost a third's to distractors elsewhere in the frame, on every
     /// seed and under TRE and SRE alike: it does not earn its place by the rule that a part
-    /// helps on six of nine sequences, and a search over everything that looks like the target
+    /// helps most sequences, and a search over everything that looks like the target
     /// is where distractors win on footage it was not tuned on.
     pub whole_frame_while_lost: bool,
     /// Whether the lock chain holds the models' learning: rates × (1 − 2 P(lost)), and nothing
     /// learnt once P(lost) ≥ 0.5 (default false: the models learn at their rates from every
-    /// estimate). Measured on the real development set over five seeds (docs/RESULTS.md,
-    /// decision log), the hold helped at most two of nine sequences under TRE and SRE and hurt
+    /// estimate). Measured on the real development set over five seeds (docs/DECISIONS.md,
+    /// `head` tables), the hold helped at most two of nine sequences under TRE and SRE and hurt
     /// up to three, and it is what makes "lost" absorbing on footage it was not tuned on: the
     /// models stop following the target just when its appearance changed. The learnt share
     /// ([`AppearanceSettings::learnt_share`]) keeps the first frame's models in every term.

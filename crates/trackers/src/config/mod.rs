@@ -55,7 +55,7 @@ pub struct MotionSettings {
     /// Mix the prior into the motion proposal by each particle's occlusion γ (no effect without
     /// an occlusion model). See `proposal::MotionProposal::occlusion_aware`. Default false: it lost
     /// tracks on `mclutter` and did not carry the target through the full occlusion of the
-    /// `occlusion` scene either (docs/RESULTS.md, decision log).
+    /// `occlusion` scene either (docs/DECISIONS.md).
     #[serde(default)]
     pub occlusion_aware: bool,
     /// The mean radius, in pixels, that the target is shrunk to for the motion estimates (see
@@ -227,7 +227,7 @@ pub struct TrackerConfig {
     pub init_spread: f64,
     /// The reacquisition jump after an occlusion (see [`ReacquisitionSettings`](crate::ReacquisitionSettings)); `None`: off. On in
     /// w-occ, w-eval and full: it lets a track find the target again after a full occlusion
-    /// (docs/RESULTS.md, decision log). With Wu's Eq. 12 as printed the jump does not help: a lost track
+    /// (docs/DECISIONS.md). With Wu's Eq. 12 as printed the jump does not help: a lost track
     /// sits on γ ≈ 1 hypotheses that Eq. 12 rates above the reappearing target.
     #[serde(default)]
     pub reacquisition: Option<ReacquisitionSettings>,
@@ -235,7 +235,7 @@ pub struct TrackerConfig {
     /// [`crate::working_scale`]); a target no larger is tracked at full resolution. `None` (the
     /// default, and every paper preset's): always full resolution, as the papers; `head`'s is
     /// [`HEAD_WORKING_RADIUS`]. Measured on the real development set, it helped some presets and
-    /// hurt others (docs/RESULTS.md, decision log).
+    /// hurt others (docs/DECISIONS.md).
     #[serde(default)]
     pub working_radius: Option<f64>,
     /// The appearance model and its colour-contrast, template and contour-contrast terms

@@ -253,7 +253,7 @@ impl Preset {
                     clutter_line_fraction: CLUTTER_LINE_FRACTION,
                     shape: None,
                     // Not the arc: with it, Table 1's S2 column (100 particles) fell below
-                    // the 95 % target for full (docs/RESULTS.md).
+                    // the 95 % target for full (docs/DECISIONS.md).
                     occlusion_form: OcclusionForm::Independent {
                         unknown_occluder_share: UNKNOWN_OCCLUDER_SHARE,
                     },
@@ -264,7 +264,7 @@ impl Preset {
                 ..base
             },
             // Untempered: tempering (`filter.min_ess_fraction`) lost AUC under TRE and SRE on
-            // most sequences (docs/RESULTS.md, decision log).
+            // most sequences (docs/DECISIONS.md).
             Preset::Head => TrackerConfig {
                 // Odobez's motion proposal (Eq. 16): each particle moved by the robust affine
                 // motion of its cluster, measured at the 16 px working scale. On the development
@@ -284,7 +284,7 @@ impl Preset {
                 // The lock chain alone says whether the target is held: a face that grows as it
                 // nears the camera is not lost. The jump is drawn around the appearance's
                 // detection, not around an extrapolation whose error grows with the gap, so its
-                // spread does not grow (docs/RESULTS.md, decision log).
+                // spread does not grow (docs/DECISIONS.md).
                 reacquisition: Some(ReacquisitionSettings {
                     spread_growth: 0.0,
                     ..ReacquisitionSettings::default()
@@ -315,14 +315,14 @@ pub const FIXED_LAMBDA: f64 = 0.0824;
 
 /// ρ of the size and shape components in every preset: 0.5, not the papers' 1. With ρ = 1 the
 /// velocity of scale, aspect and shear is a random walk that, over a hundred frames, deforms the
-/// contour on clutter (docs/RESULTS.md, decision log); translation keeps ρ = 1 as in Odobez
+/// contour on clutter (docs/DECISIONS.md); translation keeps ρ = 1 as in Odobez
 /// Eq. 17.
 pub const SHAPE_VELOCITY_RETENTION: f64 = 0.5;
 
 /// The share of a measurement line where background clutter can appear, in every preset with
 /// Wu's likelihood (see [`LikelihoodSettings::clutter_line_fraction`]). Half of each measurement
 /// line lies on the target; with Wu Eq. 1's whole line, λ̂ comes out at half the background
-/// density and β̂ picks the wrong class (docs/RESULTS.md, decision log).
+/// density and β̂ picks the wrong class (docs/DECISIONS.md).
 pub const CLUTTER_LINE_FRACTION: f64 = 0.5;
 
 /// The share of an occluded line's edge count given to an occluder of unknown texture in full
@@ -330,7 +330,7 @@ pub const CLUTTER_LINE_FRACTION: f64 = 0.5;
 /// occlusion arc instead, [`OCCLUSION_ARC`], which has no share). With the share alone, a contour shrinks onto the
 /// visible sliver of a target sliding behind the `occlusion` scene's occluder and γ̂ stays near
 /// 0 while the target is hidden. On `mclutter`, a share of 0.5 or 1 keeps tracks that 0 (Wu Eq. 12
-/// as printed) loses (docs/RESULTS.md, decision log); half-and-half keeps Wu's background law for
+/// as printed) loses (docs/DECISIONS.md); half-and-half keeps Wu's background law for
 /// occluders that look like the background.
 pub const UNKNOWN_OCCLUDER_SHARE: f64 = 0.5;
 
@@ -339,7 +339,7 @@ pub const UNKNOWN_OCCLUDER_SHARE: f64 = 0.5;
 /// `false` gives them the independent mixture of full ([`OcclusionForm::Independent`] with
 /// [`UNKNOWN_OCCLUDER_SHARE`]). Wu's Eq. 11–12 as printed stays available as
 /// `OcclusionForm::default()`; full keeps the independent mixture, because with the arc its
-/// Table 1 S2 column fell below the 95 % target (docs/RESULTS.md, decision log). With the arc,
+/// Table 1 S2 column fell below the 95 % target (docs/DECISIONS.md). With the arc,
 /// γ̂ rises while the target is hidden and falls after it.
 pub const OCCLUSION_ARC: bool = true;
 
@@ -349,7 +349,7 @@ pub const OCCLUSION_ARC: bool = true;
 /// the contour shrinks onto the visible sliver instead. With 0.3, γ̂ rises while the target is
 /// hidden and falls after it on every seed `tests/tracking.rs` checks; the price is the zooming
 /// `distractor` scene, where a larger σ_γ lets γ explain the mismatch of a zooming target
-/// (docs/RESULTS.md, decision log).
+/// (docs/DECISIONS.md).
 pub const W_OCC_SIGMA_GAMMA: f64 = 0.3;
 
 /// The contour presets' shape test of a locked estimate ([`ReacquisitionSettings::shape_tolerance`]):

@@ -84,7 +84,7 @@ pub struct DynamicsSettings {
     /// through the exponential's inverse distribution function, so the random streams do not
     /// change; the hidden variables are drawn from their prior, so no weight term is needed.
     /// κ > 0 pulls the free-target γ̂ below the locked range's mean; no preset uses it (why:
-    /// docs/RESULTS.md, decision log).
+    /// docs/DECISIONS.md).
     #[serde(default)]
     pub locked_gamma_rate: f64,
     /// r, the pull of the size and shape components towards the target's remembered shape per
@@ -96,7 +96,7 @@ pub struct DynamicsSettings {
     /// reacquisition is off). Without an anchor the prediction is unchanged. It keeps a contour
     /// from shrinking onto the visible sliver of a target sliding behind an occluder, but under a
     /// zooming camera the slowly remembered size is the wrong mean, so it stays off
-    /// (docs/RESULTS.md, decision log).
+    /// (docs/DECISIONS.md).
     #[serde(default)]
     pub shape_reversion: f64,
     /// ε, the share of each particle's hidden-chain transitions (β, and α of the status HMM)
