@@ -17,7 +17,8 @@ whole video file, image folder or OTB folder as ``track run`` does; ``contour_tr
 Errors: ``TypeError`` and ``ValueError`` for bad arguments; ``MemoryError`` for a frame too
 large to allocate (checked before allocating); ``UnreliableMotion`` for a motion estimate that
 failed; ``RuntimeError`` for a tracker that failed; ``OSError`` for outputs that cannot be
-written. A ``Tracker`` may be shared by threads: its calls run one at a time (docs/PYTHON-errors.md).
+written. A ``Tracker`` may be shared by threads: its calls run one at a time (docs/PYTHON.md,
+"Errors and threads").
 """
 
 from ._native import (

@@ -1,5 +1,5 @@
-"""Bad input raises only the documented exceptions (docs/PYTHON-errors.md), with short messages
-that name what is wrong; numpy integer scalars are accepted wherever an int is."""
+"""Bad input raises only the documented exceptions (docs/PYTHON.md, "Errors and threads"), with
+short messages that name what is wrong; numpy integer scalars are accepted wherever an int is."""
 
 import threading
 

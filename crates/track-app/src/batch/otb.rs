@@ -25,7 +25,7 @@ use crate::otb::{
     Protocol, RunStart, SequenceScore, boxes_path, boxes_text, ceiling_sentence, csv,
     in_start_convention, markdown, mean_over_runs, run_starts, set_means,
 };
-use crate::output::{OutputFolder, write_atomic};
+use crate::output::{OutputGuard, write_atomic};
 use crate::sequence::{FrameSource, open_sequence};
 use crate::session::Session;
 use crate::{AppError, Result};
@@ -476,7 +476,7 @@ pub fn score(
     let names: Vec<&str> = configs.iter().map(|c| c.name.as_str()).collect();
     let protocols = sorted(protocols);
     let inputs: Vec<&Path> = sequences.iter().map(PathBuf::as_path).collect();
-    let _folder = OutputFolder::open(out, &inputs)?;
+    let _folder = OutputGuard::new(&inputs).folder(out)?;
     // The sequences again, from their ground truth (the frames were checked by the plan).
     let mut prepared = Vec::new();
     for dir in sequences {
