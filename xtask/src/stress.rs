@@ -105,7 +105,9 @@ fn pipelines(args: &StressArgs) -> Result<Vec<Pipeline>, String> {
     };
     let mut out: Vec<Pipeline> = Vec::new();
     for spec in &specs {
-        let mut p: Pipeline = spec.parse().map_err(|e| format!("--transform {spec}: {e}"))?;
+        let mut p: Pipeline = spec
+            .parse()
+            .map_err(|e| format!("--transform {spec}: {e}"))?;
         for set in &args.set {
             let (path, value) = set
                 .split_once('=')
@@ -453,7 +455,10 @@ mod tests {
         assert!(rec.contains("\"Beta\"") && !rec.contains("\"donors\": [\n    \"Alpha\""));
         let visible = fs::read_to_string(out.join("occlude/Alpha/visible.txt")).unwrap();
         assert_eq!(visible.lines().count(), 12);
-        assert!(visible.lines().any(|l| l.parse::<f64>().unwrap() < 0.75), "{visible}");
+        assert!(
+            visible.lines().any(|l| l.parse::<f64>().unwrap() < 0.75),
+            "{visible}"
+        );
         assert!(out.join("suite.json").is_file());
 
         // The same inputs, settings and seed: the same bytes, file for file.
@@ -480,18 +485,30 @@ mod tests {
         let good = tmp.path().join("Good");
         otb_folder(&good, 4, 0);
         let missing = tmp.path().join("Missing");
-        let err = run(&args(vec![good.clone(), missing.clone()], tmp.path().join("o")), |_| ())
-            .unwrap_err();
-        assert!(err.contains("Missing") && err.contains("not a folder"), "{err}");
+        let err = run(
+            &args(vec![good.clone(), missing.clone()], tmp.path().join("o")),
+            |_| (),
+        )
+        .unwrap_err();
+        assert!(
+            err.contains("Missing") && err.contains("not a folder"),
+            "{err}"
+        );
         let bare = tmp.path().join("Bare");
         fs::create_dir_all(bare.join("img")).unwrap();
         let err = run(&args(vec![bare], tmp.path().join("o")), |_| ()).unwrap_err();
-        assert!(err.contains("Bare") && err.contains("groundtruth_rect.txt"), "{err}");
+        assert!(
+            err.contains("Bare") && err.contains("groundtruth_rect.txt"),
+            "{err}"
+        );
         let short = tmp.path().join("Short");
         otb_folder(&short, 4, 0);
         fs::write(short.join("groundtruth_rect.txt"), "1,2,3,4\n").unwrap();
         let err = run(&args(vec![short], tmp.path().join("o")), |_| ()).unwrap_err();
-        assert!(err.contains("Short") && err.contains("1 ground-truth lines for 4 frames"), "{err}");
+        assert!(
+            err.contains("Short") && err.contains("1 ground-truth lines for 4 frames"),
+            "{err}"
+        );
         let mut bad = args(vec![good.clone()], tmp.path().join("o"));
         bad.transforms = vec!["wobble".into()];
         assert!(run(&bad, |_| ()).unwrap_err().contains("wobble"));

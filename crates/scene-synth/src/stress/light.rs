@@ -92,9 +92,8 @@ impl Light {
             gammas.push(rng.random_range(self.gamma_min..=self.gamma_max));
         }
         let start = rng.random_range(0.0..std::f64::consts::TAU);
-        let turn = self.turn
-            * rng.random_range(0.5..=1.0)
-            * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        let turn =
+            self.turn * rng.random_range(0.5..=1.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
         let step = self.ramp_frames as f64;
         let frames = (0..frames)
             .map(|k| {

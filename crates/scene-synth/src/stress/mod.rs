@@ -124,7 +124,8 @@ pub enum Transform {
 
 impl Transform {
     /// Every transform's name, in the suite's order.
-    pub const NAMES: [&'static str; 7] = ["shake", "occlude", "tilt", "grey", "small", "light", "zoom"];
+    pub const NAMES: [&'static str; 7] =
+        ["shake", "occlude", "tilt", "grey", "small", "light", "zoom"];
 
     /// The transform's name.
     pub fn name(&self) -> &'static str {
@@ -142,8 +143,12 @@ impl Transform {
     /// The failure class the transform stands for.
     pub fn class(&self) -> &'static str {
         match self {
-            Transform::Shake(_) => "abrupt motion: jumps of 1–2 target radii with reversals and blur",
-            Transform::Occlude(_) => "partial occlusion: 30–70 % of the head covered for 20–100 frames",
+            Transform::Shake(_) => {
+                "abrupt motion: jumps of 1–2 target radii with reversals and blur"
+            }
+            Transform::Occlude(_) => {
+                "partial occlusion: 30–70 % of the head covered for 20–100 frames"
+            }
             Transform::Tilt(_) => "in-plane tilt: the picture turned about the head to ±45°",
             Transform::Grey => "grey footage",
             Transform::Small(_) => "small targets: about 20 px wide",
@@ -192,8 +197,12 @@ impl Transform {
     /// [`Error::InvalidParameter`] for a value out of range.
     pub fn with_setting(&self, field: &str, value: &str) -> Result<Self> {
         let over = |reason: String| Error::Override { reason };
-        let value: serde_json::Value = serde_json::from_str(value)
-            .map_err(|e| over(format!("{}.{field}: `{value}` is not JSON: {e}", self.name())))?;
+        let value: serde_json::Value = serde_json::from_str(value).map_err(|e| {
+            over(format!(
+                "{}.{field}: `{value}` is not JSON: {e}",
+                self.name()
+            ))
+        })?;
         let mut whole = serde_json::to_value(self)?;
         let settings = whole
             .get_mut("settings")
@@ -260,7 +269,9 @@ impl Pipeline {
 
     /// Whether a stage needs donor frames (`occlude`).
     pub fn needs_donors(&self) -> bool {
-        self.stages.iter().any(|t| matches!(t, Transform::Occlude(_)))
+        self.stages
+            .iter()
+            .any(|t| matches!(t, Transform::Occlude(_)))
     }
 }
 
@@ -296,9 +307,15 @@ enum StagePlan {
     Occlude(occlude::OccludePlan),
     Tilt(tilt::TiltPlan),
     Grey,
-    Small { size: (u32, u32), scale: (f64, f64) },
+    Small {
+        size: (u32, u32),
+        scale: (f64, f64),
+    },
     Light(light::LightPlan),
-    Zoom { crops: Vec<Crop>, fitted: CameraZoom },
+    Zoom {
+        crops: Vec<Crop>,
+        fitted: CameraZoom,
+    },
 }
 
 impl StagePlan {
@@ -354,7 +371,9 @@ impl StagePlan {
                 serde_json::json!({ "size": [size.0, size.1], "scale": [scale.0, scale.1] })
             }
             StagePlan::Light(p) => p.describe(),
-            StagePlan::Zoom { fitted, .. } => serde_json::json!({ "fitted_max_zoom": fitted.max_zoom }),
+            StagePlan::Zoom { fitted, .. } => {
+                serde_json::json!({ "fitted_max_zoom": fitted.max_zoom })
+            }
         }
     }
 }
@@ -443,7 +462,10 @@ pub fn plan(
                 };
                 let fitted = zoom.fitted(largest, size, z.fill);
                 let mut operator = Operator::new(fitted, size)?;
-                let crops = truth.iter().map(|b| operator.next_crop(b.as_ref())).collect();
+                let crops = truth
+                    .iter()
+                    .map(|b| operator.next_crop(b.as_ref()))
+                    .collect();
                 StagePlan::Zoom { crops, fitted }
             }
         };

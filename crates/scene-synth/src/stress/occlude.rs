@@ -106,8 +106,7 @@ impl Occlude {
         if self.gap_min == 0 || self.gap_max < self.gap_min {
             return bad("occlude.gap_min", "need 1 ≤ gap_min ≤ gap_max");
         }
-        if !(self.sway_min >= 2.0 && self.sway_max.is_finite() && self.sway_max >= self.sway_min)
-        {
+        if !(self.sway_min >= 2.0 && self.sway_max.is_finite() && self.sway_max >= self.sway_min) {
             return bad("occlude.sway_min", "need 2 ≤ sway_min ≤ sway_max, finite");
         }
         if !(self.overhang > 0.0 && self.overhang <= 4.0) {
@@ -160,7 +159,8 @@ impl Occlude {
                 Side::Left | Side::Right => (b.w, b.h),
                 Side::Top | Side::Bottom => (b.h, b.w),
             };
-            let aspect = (self.cover_max + self.overhang) * along / ((1.0 + 2.0 * self.margin) * across);
+            let aspect =
+                (self.cover_max + self.overhang) * along / ((1.0 + 2.0 * self.margin) * across);
             let aspect = match side {
                 Side::Left | Side::Right => aspect,
                 Side::Top | Side::Bottom => 1.0 / aspect,
@@ -211,10 +211,13 @@ fn cut_texture(donors: &[Donor], aspect: f64, rng: &mut Pcg64Mcg) -> Result<RgbI
     let first = rng.random_range(0..donors.len());
     for d in 0..donors.len() {
         let donor = &donors[(first + d) % donors.len()];
-        let (w, h) = (f64::from(donor.frame.width()), f64::from(donor.frame.height()));
-        let keep_out = donor.target.map(|t| {
-            BoundingBox::new(t.x - 0.25 * t.w, t.y - 0.25 * t.h, 1.5 * t.w, 1.5 * t.h)
-        });
+        let (w, h) = (
+            f64::from(donor.frame.width()),
+            f64::from(donor.frame.height()),
+        );
+        let keep_out = donor
+            .target
+            .map(|t| BoundingBox::new(t.x - 0.25 * t.w, t.y - 0.25 * t.h, 1.5 * t.w, 1.5 * t.h));
         let mut share = rng.random_range(0.3..=0.6);
         for _ in 0..6 {
             let mut rh = share * h;
@@ -308,10 +311,30 @@ impl OccludePlan {
         // edge, across) in [0, 1] of a point inside it.
         let reach = cover_max + overhang;
         let (x0, x1, y0, y1) = match s.side {
-            Side::Left => (b.x - overhang * b.w, b.x + f * b.w, b.y - margin * b.h, b.y + (1.0 + margin) * b.h),
-            Side::Right => (b.x + (1.0 - f) * b.w, b.x + (1.0 + overhang) * b.w, b.y - margin * b.h, b.y + (1.0 + margin) * b.h),
-            Side::Top => (b.x - margin * b.w, b.x + (1.0 + margin) * b.w, b.y - overhang * b.h, b.y + f * b.h),
-            Side::Bottom => (b.x - margin * b.w, b.x + (1.0 + margin) * b.w, b.y + (1.0 - f) * b.h, b.y + (1.0 + overhang) * b.h),
+            Side::Left => (
+                b.x - overhang * b.w,
+                b.x + f * b.w,
+                b.y - margin * b.h,
+                b.y + (1.0 + margin) * b.h,
+            ),
+            Side::Right => (
+                b.x + (1.0 - f) * b.w,
+                b.x + (1.0 + overhang) * b.w,
+                b.y - margin * b.h,
+                b.y + (1.0 + margin) * b.h,
+            ),
+            Side::Top => (
+                b.x - margin * b.w,
+                b.x + (1.0 + margin) * b.w,
+                b.y - overhang * b.h,
+                b.y + f * b.h,
+            ),
+            Side::Bottom => (
+                b.x - margin * b.w,
+                b.x + (1.0 + margin) * b.w,
+                b.y + (1.0 - f) * b.h,
+                b.y + (1.0 + overhang) * b.h,
+            ),
         };
         let tex = &self.textures[s.texture];
         let (tw, th) = (f64::from(tex.width()), f64::from(tex.height()));

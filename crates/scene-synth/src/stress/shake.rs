@@ -68,7 +68,10 @@ impl Shake {
         if !(self.jump_min.is_finite() && self.jump_min > 0.0 && self.jump_max >= self.jump_min)
             || !self.jump_max.is_finite()
         {
-            return bad("shake.jump_min", "need 0 < jump_min ≤ jump_max, both finite");
+            return bad(
+                "shake.jump_min",
+                "need 0 < jump_min ≤ jump_max, both finite",
+            );
         }
         if self.gap_min == 0 || self.gap_max < self.gap_min {
             return bad("shake.gap_min", "need 1 ≤ gap_min ≤ gap_max");
@@ -200,26 +203,14 @@ impl ShakePlan {
         let (cx, cy) = self.frames[k].centre;
         let (hx, hy) = self.half();
         let z = self.zoom;
-        BoundingBox::new(
-            (b.x - cx) * z + hx,
-            (b.y - cy) * z + hy,
-            b.w * z,
-            b.h * z,
-        )
+        BoundingBox::new((b.x - cx) * z + hx, (b.y - cy) * z + hy, b.w * z, b.h * z)
     }
 
     pub(crate) fn apply(&self, k: usize, frame: &image::RgbImage) -> image::RgbImage {
         let f = self.frames[k];
         let (hx, hy) = self.half();
         let s = 1.0 / self.zoom;
-        let map = [
-            s,
-            0.0,
-            f.centre.0 - s * hx,
-            0.0,
-            s,
-            f.centre.1 - s * hy,
-        ];
+        let map = [s, 0.0, f.centre.0 - s * hx, 0.0, s, f.centre.1 - s * hy];
         let blur = (f.blur.0 != 0.0 || f.blur.1 != 0.0).then_some(f.blur);
         super::warp::warp(frame, self.size, &map, blur)
     }

@@ -230,15 +230,29 @@ fn stress_occluders_are_never_cut_from_a_donor_s_target() {
     // every cut must come from the blue right half.
     let donor = Donor {
         frame: RgbImage::from_fn(120, 60, |i, _| {
-            if i < 60 { Rgb([255, 0, 0]) } else { Rgb([0, 0, 255]) }
+            if i < 60 {
+                Rgb([255, 0, 0])
+            } else {
+                Rgb([0, 0, 255])
+            }
         }),
         target: Some(BoundingBox::new(-0.5, -0.5, 60.0, 60.0)),
     };
     for seed in 0..20 {
-        let p = plan(&"occlude".parse().unwrap(), SIZE, &truth(), &[donor.clone()], seed).unwrap();
+        let p = plan(
+            &"occlude".parse().unwrap(),
+            SIZE,
+            &truth(),
+            &[donor.clone()],
+            seed,
+        )
+        .unwrap();
         for k in 0..FRAMES {
             let out = p.apply(k, &frame(k)).unwrap();
-            assert!(out.pixels().all(|px| px.0 != [255, 0, 0]), "seed {seed}, frame {k}");
+            assert!(
+                out.pixels().all(|px| px.0 != [255, 0, 0]),
+                "seed {seed}, frame {k}"
+            );
         }
     }
 }
@@ -249,7 +263,13 @@ fn stress_composed_transforms_map_the_truth_through_every_stage() {
     assert_truth_matches("tilt,small", 2.0);
     let p: Pipeline = "grey,shake".parse().unwrap();
     assert_eq!(p.name(), "grey+shake");
-    assert!("grey,wobble".parse::<Pipeline>().unwrap_err().to_string().contains("wobble"));
+    assert!(
+        "grey,wobble"
+            .parse::<Pipeline>()
+            .unwrap_err()
+            .to_string()
+            .contains("wobble")
+    );
 }
 
 #[test]
@@ -259,7 +279,9 @@ fn stress_every_transform_is_deterministic_for_a_seed() {
         let b = planned(name, 11);
         let c = planned(name, 12);
         let frames_of = |p: &Plan| -> Vec<Vec<u8>> {
-            (0..FRAMES).map(|k| p.apply(k, &frame(k)).unwrap().into_raw()).collect()
+            (0..FRAMES)
+                .map(|k| p.apply(k, &frame(k)).unwrap().into_raw())
+                .collect()
         };
         assert_eq!(frames_of(&a), frames_of(&b), "{name}");
         assert_eq!(a.truth(), b.truth(), "{name}");
@@ -274,8 +296,16 @@ fn stress_settings_are_checked_and_overridden_by_name() {
     let t2 = t.with_setting("zoom", "1.5").unwrap();
     assert!(matches!(t2, Transform::Shake(s) if s.zoom == 1.5));
     assert!(t.with_setting("zoom", "0.5").is_err());
-    assert!(t.with_setting("nonsense", "1").unwrap_err().to_string().contains("nonsense"));
+    assert!(
+        t.with_setting("nonsense", "1")
+            .unwrap_err()
+            .to_string()
+            .contains("nonsense")
+    );
     assert!(Transform::Grey.with_setting("x", "1").is_err());
-    assert_ne!(derive_seed(1, &["Boy", "shake"]), derive_seed(1, &["Boy", "tilt"]));
+    assert_ne!(
+        derive_seed(1, &["Boy", "shake"]),
+        derive_seed(1, &["Boy", "tilt"])
+    );
     assert_ne!(derive_seed(1, &["ab", "c"]), derive_seed(1, &["a", "bc"]));
 }

@@ -55,7 +55,10 @@ impl Tilt {
             && self.period_max.is_finite()
             && self.period_max >= self.period_min)
         {
-            return bad("tilt.period_min", "need 4 ≤ period_min ≤ period_max, finite");
+            return bad(
+                "tilt.period_min",
+                "need 4 ≤ period_min ≤ period_max, finite",
+            );
         }
         Ok(())
     }
@@ -121,14 +124,7 @@ impl TiltPlan {
         let (c, s) = (self.angles[k].cos(), self.angles[k].sin());
         let (cx, cy) = self.centres[k];
         // The inverse rotation: p = Rᵀ(p' − c) + c.
-        let map = [
-            c,
-            s,
-            cx - c * cx - s * cy,
-            -s,
-            c,
-            cy + s * cx - c * cy,
-        ];
+        let map = [c, s, cx - c * cx - s * cy, -s, c, cy + s * cx - c * cy];
         super::warp::warp(frame, self.size, &map, None)
     }
 

@@ -102,7 +102,12 @@ mod tests {
         assert_eq!(shifted.get_pixel(3, 3), src.get_pixel(5, 4));
         // A blur along x of a picture constant along x changes nothing.
         let rows = RgbImage::from_fn(9, 7, |_, j| Rgb([(j * 30) as u8; 3]));
-        let blurred = warp(&rows, (9, 7), &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0], Some((6.0, 0.0)));
+        let blurred = warp(
+            &rows,
+            (9, 7),
+            &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+            Some((6.0, 0.0)),
+        );
         assert_eq!(blurred, rows);
     }
 }
