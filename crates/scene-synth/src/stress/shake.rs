@@ -65,8 +65,10 @@ impl Shake {
         if !(self.zoom.is_finite() && self.zoom > 1.0) {
             return bad("shake.zoom", "must be a finite number > 1");
         }
-        if !(self.jump_min.is_finite() && self.jump_min > 0.0 && self.jump_max >= self.jump_min)
-            || !self.jump_max.is_finite()
+        if !(self.jump_min.is_finite()
+            && self.jump_min > 0.0
+            && self.jump_max >= self.jump_min
+            && self.jump_max.is_finite())
         {
             return bad(
                 "shake.jump_min",

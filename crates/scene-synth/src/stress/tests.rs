@@ -193,7 +193,7 @@ fn stress_occluders_cover_the_share_they_report_and_the_truth_stays_whole() {
     assert_eq!(p.truth(), truth().as_slice());
     let visible = p.visible().unwrap();
     let mut covered_frames = 0;
-    for k in 0..FRAMES {
+    for (k, v) in visible.iter().enumerate() {
         let out = p.apply(k, &frame(k)).unwrap();
         let b = true_box(k);
         // The share of the box's pixels still showing the scene (not the green occluder).
@@ -206,7 +206,7 @@ fn stress_occluders_cover_the_share_they_report_and_the_truth_stays_whole() {
                 }
             }
         }
-        let v = visible[k].unwrap();
+        let v = v.unwrap();
         // Whole pixels against a continuous edge: one row or column of the box, 1/24 at most.
         assert!(
             ((1.0 - green / all) - v).abs() <= 1.0 / 24.0 + 1e-9,
@@ -243,7 +243,7 @@ fn stress_occluders_are_never_cut_from_a_donor_s_target() {
             &"occlude".parse().unwrap(),
             SIZE,
             &truth(),
-            &[donor.clone()],
+            std::slice::from_ref(&donor),
             seed,
         )
         .unwrap();
