@@ -410,10 +410,7 @@ pub fn run(args: &OtbArgs) -> Result<()> {
                 &dir.join("suite.csv"),
                 super::suite::csv(*protocol, &means).as_bytes(),
             )?;
-            md = format!(
-                "{table}
-{md}"
-            );
+            md = format!("{table}\n{md}");
         }
         if let Some(c) = ceiling {
             md.push_str(&format!("\n{}\n", ceiling_sentence(*c)));
