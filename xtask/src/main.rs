@@ -1,6 +1,7 @@
 //! `cargo xtask`: project automation. Thin by design: generation logic lives in library crates.
 
 mod camera_zoom;
+mod stress;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -25,6 +26,10 @@ enum Command {
     /// that follows the labelled target and resized back, the ground truth mapped alike, written
     /// as OTB folders (`OUT/<sequence>`: img/, groundtruth_rect.txt, camera_zoom.csv and .json).
     CameraZoom(camera_zoom::CameraZoomArgs),
+    /// The stress suite: every failure class (shake, occlude, tilt, grey, small, light, zoom)
+    /// laid over OTB folders of real footage, with the truth mapped alike, written as OTB
+    /// folders `OUT/<transform>/<clip>` (img/, groundtruth_rect.txt, stress.json, visible.txt).
+    Stress(stress::StressArgs),
 }
 
 /// Arguments of `gen-clutter`.
@@ -153,6 +158,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::GenClutter(args) => gen_clutter(args),
         Command::CameraZoom(args) => camera_zoom::run(args, |line| println!("{line}")),
+        Command::Stress(args) => stress::run(args, |line| println!("{line}")),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

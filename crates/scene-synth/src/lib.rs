@@ -14,6 +14,7 @@
 //!
 //! [`camera_zoom`] lays a known camera zoom over real footage instead: each frame cropped about a
 //! point that follows the labelled target and resized back, the ground truth mapped alike.
+//! [`stress`] lays every failure class of the stress suite over real footage alike.
 //!
 //! The target is an ellipse with a smooth random interior texture and an outline whose contrast
 //! dips in low-contrast stretches. Clutter density is calibrated with the workspace's default
@@ -44,6 +45,7 @@ mod error;
 pub mod geometry;
 pub mod params;
 mod render;
+pub mod stress;
 pub mod texture;
 pub mod trajectory;
 mod truth;

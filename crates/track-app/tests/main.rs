@@ -16,5 +16,6 @@ mod real_footage;
 mod reliability;
 mod silent_results;
 mod smoothing_cli;
+mod stress_suite;
 mod user_files;
 mod video;

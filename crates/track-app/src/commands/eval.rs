@@ -172,7 +172,8 @@ pub struct SwitchingArgs {
 /// Arguments of `track eval otb`.
 #[derive(Debug, clap::Args)]
 pub struct OtbArgs {
-    /// OTB folders.
+    /// OTB folders, or stress suites (`cargo xtask stress --out SUITE`): every clip under every
+    /// transform, with a mean per transform (see `track_app::otb::suite`).
     #[arg(required = true)]
     pub sequences: Vec<PathBuf>,
     /// Trackers (default head when neither --config nor --results is given), particles and seed

@@ -11,9 +11,8 @@ use trackers::TrackerConfig;
 use vision_core::BoundingBox;
 
 use super::{
-    Protocol, RunStart, SequenceScore, boxes_path, boxes_text, ceiling_sentence, csv,
-    in_start_convention, markdown, mean_over_runs, read_boxes, run_starts, sequence_name,
-    set_means,
+    Protocol, RunStart, SequenceScore, boxes_text, ceiling_sentence, csv, in_start_convention,
+    markdown, mean_over_runs, read_boxes, run_starts, sequence_name, set_means,
 };
 use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
 use crate::metrics::{SequenceMetrics, mean_metrics, score_run, with_self_evaluation};
@@ -30,6 +29,9 @@ const LOST_INDEX: usize = 2;
 struct Prepared {
     dir: PathBuf,
     name: String,
+    /// The clip's folder name, and its transform in a stress suite ([`super::suite`]).
+    clip: String,
+    transform: Option<String>,
     /// The sequence's frames, all of them.
     frames: usize,
     /// The ground truth of the frames kept (every `--frame-step`-th).
@@ -88,7 +90,12 @@ fn parse_results(values: &[String]) -> Result<Vec<(String, PathBuf)>> {
 
 /// Reads a sequence's ground truth and frame count, checks its first box against the frame, keeps
 /// every `step`-th frame's line from the first, and lays out the runs of each protocol on those.
-fn prepare(dir: &Path, protocols: &[Protocol], step: usize) -> Result<Prepared> {
+fn prepare(
+    dir: &Path,
+    transform: Option<&str>,
+    protocols: &[Protocol],
+    step: usize,
+) -> Result<Prepared> {
     let (sequence, gt_path) = super::open_otb(dir)?;
     let info = sequence.source.validate_all()?;
     let truth = load_groundtruth(&gt_path)?;
@@ -130,7 +137,9 @@ fn prepare(dir: &Path, protocols: &[Protocol], step: usize) -> Result<Prepared> 
     }
     Ok(Prepared {
         dir: dir.to_path_buf(),
-        name: sequence_name(dir),
+        name: super::suite::display_name(transform, &sequence_name(dir)),
+        clip: sequence_name(dir),
+        transform: transform.map(str::to_owned),
         frames: info.frames,
         truth,
         starts,
@@ -264,9 +273,10 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
         }
     }
     folder.check_free(Path::new("index.html"), None)?;
-    let prepared: Vec<Prepared> = sequences
+    // A stress suite stands for every clip under every transform.
+    let prepared: Vec<Prepared> = super::suite::expand(sequences)?
         .iter()
-        .map(|d| prepare(d, &protocols, step))
+        .map(|e| prepare(&e.dir, e.transform.as_deref(), &protocols, step))
         .collect::<Result<_>>()?;
     for (i, p) in prepared.iter().enumerate() {
         if prepared[..i].iter().any(|q| q.name == p.name) {
@@ -289,7 +299,14 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
             for (name, dir) in &results {
                 let mut outcomes = Vec::new();
                 for (k, start) in seq.starts[pi].iter().enumerate() {
-                    let path = boxes_path(dir, protocol, name, &seq.name, k);
+                    let path = super::suite::boxes_path_in(
+                        dir,
+                        seq.transform.as_deref(),
+                        protocol,
+                        name,
+                        &seq.clip,
+                        k,
+                    );
                     let boxes = read_boxes(&path, seq.truth.len())?;
                     if let Some(metrics) = score_run(&boxes, &seq.truth, start.frame, None)? {
                         outcomes.push(RunOutcome {
@@ -353,7 +370,14 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
                 let mut mine = Vec::new();
                 for k in 0..seq.starts[pi].len() {
                     if let Some(Some(Some(o))) = outcomes.next() {
-                        let path = boxes_path(out, protocol, &config.name, &seq.name, k);
+                        let path = super::suite::boxes_path_in(
+                            out,
+                            seq.transform.as_deref(),
+                            protocol,
+                            &config.name,
+                            &seq.clip,
+                            k,
+                        );
                         write_atomic(&path, boxes_text(&o.boxes).as_bytes())?;
                         mine.push(o);
                     }
@@ -399,10 +423,27 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
         };
         sections.push((protocol, rows, means, charts, ceiling));
     }
+    let groups: Vec<(String, String)> = prepared
+        .iter()
+        .map(|p| {
+            let g = p.transform.as_deref().unwrap_or(super::suite::AS_SHOT);
+            (p.name.clone(), g.to_owned())
+        })
+        .collect();
     let mut printed = String::new();
     for (protocol, rows, _, charts, ceiling) in &sections {
         let dir = out.join(protocol.name());
         let mut md = markdown(*protocol, rows);
+        // Under a stress suite: the mean per transform before the per-clip tables.
+        if let Some(means) = super::suite::column_means(rows, &groups) {
+            let table = super::suite::markdown(*protocol, &means);
+            write_atomic(&dir.join("suite.md"), table.as_bytes())?;
+            write_atomic(
+                &dir.join("suite.csv"),
+                super::suite::csv(*protocol, &means).as_bytes(),
+            )?;
+            md = format!("{table}\n{md}");
+        }
         if let Some(c) = ceiling {
             md.push_str(&format!("\n{}\n", ceiling_sentence(*c)));
         }

@@ -29,6 +29,7 @@ pub mod eval;
 pub mod page;
 pub mod paired;
 pub mod plots;
+pub mod suite;
 
 /// Runs of TRE per sequence (before dropping duplicate starts).
 pub const TRE_RUNS: usize = 10;

@@ -86,7 +86,8 @@ pub fn chart(
     };
     let file = match over {
         None => format!("{}.svg", kind.name()),
-        Some(s) => format!("{}_{s}.svg", kind.name()),
+        // A clip of a stress suite is named `<transform>/<clip>`: one file name all the same.
+        Some(s) => format!("{}_{}.svg", kind.name(), s.replace('/', "_")),
     };
     // Curves with their legend figure, best first (OTB's order).
     let mut curves: Vec<Curve> = Vec::new();
