@@ -25,7 +25,7 @@ use crate::otb::{
     Protocol, RunStart, SequenceScore, boxes_path, boxes_text, ceiling_sentence, csv,
     in_start_convention, markdown, mean_over_runs, run_starts, set_means,
 };
-use crate::output::{OutputFolder, write_atomic};
+use crate::output::{OutputGuard, write_atomic};
 use crate::sequence::{FrameSource, open_sequence};
 use crate::session::Session;
 use crate::{AppError, Result};
@@ -475,8 +475,9 @@ pub fn score(
     let configs = runs.configs()?;
     let names: Vec<&str> = configs.iter().map(|c| c.name.as_str()).collect();
     let protocols = sorted(protocols);
-    let inputs: Vec<&Path> = sequences.iter().map(PathBuf::as_path).collect();
-    let _folder = OutputFolder::open(out, &inputs)?;
+    // The one output guard of every command: the folder is checked against the sequences
+    // (never one of them nor inside one), then locked, as `track eval otb` does.
+    let _folder = OutputGuard::new(sequences).folder(out)?;
     // The sequences again, from their ground truth (the frames were checked by the plan).
     let mut prepared = Vec::new();
     for dir in sequences {
