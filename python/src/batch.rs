@@ -41,13 +41,13 @@ pub fn _track_video<'py>(
     config: Option<&Bound<'py, PyAny>>,
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let particles = crate::non_negative(particles, "particles")?;
-    let seed = crate::non_negative(seed, "seed")?;
-    let config = crate::tracker_config(py, preset, particles, seed, config)?;
+    let particles = crate::args::non_negative(particles, "particles")?;
+    let seed = crate::args::non_negative(seed, "seed")?;
+    let config = crate::config::tracker_config(py, preset, particles, seed, config)?;
     let init = match init.filter(|b| !b.is_none()) {
         Some(b) => {
-            let b = crate::parse_box(b, "init")?;
-            crate::check_finite_box(&b, "init")?;
+            let b = crate::args::parse_box(b, "init")?;
+            crate::args::check_finite_box(&b, "init")?;
             Some(b)
         }
         None => None,
@@ -111,12 +111,12 @@ fn tracker_runs(
             ))),
         })
         .collect::<PyResult<_>>()?;
-    let particles = crate::non_negative(particles, "particles")?
+    let particles = crate::args::non_negative(particles, "particles")?
         .map(|n| usize::try_from(n).unwrap_or(usize::MAX));
     Ok(TrackerRuns {
         trackers,
         particles,
-        seed: crate::non_negative(seed, "seed")?,
+        seed: crate::args::non_negative(seed, "seed")?,
     })
 }
 

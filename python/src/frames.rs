@@ -19,7 +19,7 @@ use pyo3::exceptions::{PyMemoryError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use vision_core::{GreyImage, luma_bt601};
 
-use crate::FrameError;
+use crate::errors::FrameError;
 
 /// The order of the channels of a colour `uint8` or `float32` frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -67,7 +67,8 @@ pub enum FrameView<'a> {
     ColourF32(ArrayView3<'a, f32>),
 }
 
-fn shape_text(shape: &[usize]) -> String {
+/// A numpy shape as Python writes it: `(120, 160, 2)`.
+pub(crate) fn shape_text(shape: &[usize]) -> String {
     let parts: Vec<String> = shape.iter().map(usize::to_string).collect();
     format!("({})", parts.join(", "))
 }

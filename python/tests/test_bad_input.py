@@ -122,6 +122,8 @@ def test_a_huge_box_gives_a_short_message():
         t.init(scene(0), (100, 100, 1e300, 1e300))
     message = str(e.value)
     assert len(message) < 120 and "1e300" in message, message
+    # The message of `track run --init 100,100,1e300,1e300` (vision-core's BoundingBox::check_start).
+    assert message == "box 100,100,1e300,1e300 lies outside the 160×120 frame (its centre is outside)"
     with pytest.raises(ValueError) as e:
         ct.estimate_motion(scene(0), scene(1), roi=(0, 0, -1e300, 5))
     assert len(str(e.value)) < 120, str(e.value)

@@ -475,8 +475,9 @@ pub fn score(
     let configs = runs.configs()?;
     let names: Vec<&str> = configs.iter().map(|c| c.name.as_str()).collect();
     let protocols = sorted(protocols);
-    let inputs: Vec<&Path> = sequences.iter().map(PathBuf::as_path).collect();
-    let _folder = OutputGuard::new(&inputs).folder(out)?;
+    // The one output guard of every command: the folder is checked against the sequences
+    // (never one of them nor inside one), then locked, as `track eval otb` does.
+    let _folder = OutputGuard::new(sequences).folder(out)?;
     // The sequences again, from their ground truth (the frames were checked by the plan).
     let mut prepared = Vec::new();
     for dir in sequences {
