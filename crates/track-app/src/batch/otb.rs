@@ -2,13 +2,14 @@
 //! [`plan`] (on the machine that holds the output folder), [`run`] (anywhere the sequences can be
 //! read, one call per run), [`score`] (back where the plan was made).
 //!
-//! The steps do what `track eval otb` does, in the same order and with the same arithmetic: the
-//! same checks of the sequences and tracker names, the same run starts
-//! ([`crate::otb::run_starts`]), the same session loop from each start, the same scoring
-//! ([`score_run`] and [`with_self_evaluation`]) and the same writers of the tables, plots, box
-//! files and index page. A run's tracker is built from its seed alone, so a run gives the same
-//! boxes wherever it runs, and [`score`] gathers the runs in the plan's order: the tables are
-//! those of `track eval otb --seed SEED` on the same folders (frames/s aside, which is a timing).
+//! The steps do what `track eval otb` does, in the same order and with the same arithmetic: they
+//! call its own checks of the sequences and tracker names, run starts
+//! ([`crate::otb::run_starts`]), scoring ([`crate::metrics::score_run`] and
+//! [`crate::metrics::with_self_evaluation`]) and writers of the tables, plots and index page, and
+//! repeat its session loop from each start. A run's tracker is built from its seed alone, so a
+//! run gives the same boxes wherever it runs, and [`score`] gathers the runs in the plan's order:
+//! the tables are those of `track eval otb --seed SEED` on the same folders (frames/s aside,
+//! which is a timing).
 //! A [`RunSpec`] holds no floating-point number (the start box is found again from the ground
 //! truth), so it crosses machines as JSON without a rounding.
 
@@ -19,19 +20,16 @@ use trackers::TrackerConfig;
 use vision_core::BoundingBox;
 
 use crate::commands::run::{Overrides, tracker_config};
-use crate::groundtruth::{check_groundtruth_len, first_box_in_frame, load_groundtruth};
-use crate::metrics::{SequenceMetrics, mean_metrics, score_run, with_self_evaluation};
-use crate::otb::{
-    Protocol, RunStart, SequenceScore, boxes_path, boxes_text, ceiling_sentence, csv,
-    in_start_convention, markdown, mean_over_runs, run_starts, set_means,
+use crate::groundtruth::{check_groundtruth_len, load_groundtruth};
+use crate::otb::eval::{
+    Prepared, RunOutcome, check_distinct, check_names, p_lost_of, prepare, score_tracked, sections,
+    write_page, write_tables,
 };
+use crate::otb::{Protocol, boxes_path, boxes_text, run_starts, sequence_name};
 use crate::output::{OutputGuard, write_atomic};
 use crate::sequence::{FrameSource, open_sequence};
 use crate::session::Session;
 use crate::{AppError, Result};
-
-/// Where P(lost) sits in a record's `alpha_probs` (locked, partially occluded, lost).
-const LOST_INDEX: usize = 2;
 
 /// A tracker of an evaluation: a preset (`--tracker NAME`) or a configuration file (`--config
 /// PATH`).
@@ -91,18 +89,7 @@ impl TrackerRuns {
             .iter()
             .map(|t| self.config(t))
             .collect::<Result<_>>()?;
-        for (i, c) in configs.iter().enumerate() {
-            check_name(&c.name, "--tracker")?;
-            if configs[..i].iter().any(|d| d.name == c.name) {
-                return Err(AppError::setting(
-                    "--tracker",
-                    format!(
-                        "{} is given twice (trackers and --results names must differ)",
-                        c.name
-                    ),
-                ));
-            }
-        }
+        check_names(configs.iter().map(|c| c.name.as_str()))?;
         Ok(configs)
     }
 }
@@ -176,46 +163,6 @@ pub struct RunResult {
     pub seconds: f64,
 }
 
-/// A sequence checked before any tracking.
-struct Prepared {
-    dir: PathBuf,
-    name: String,
-    frames: usize,
-    truth: Vec<Option<BoundingBox>>,
-    /// The runs of each protocol, in the order of `protocols`.
-    starts: Vec<Vec<RunStart>>,
-}
-
-/// A name used as a folder of box files: letters, digits, `-`, `_`, `.` and `+`, not `.`, `..`
-/// or `plots` (the rule of `track eval otb`).
-fn check_name(name: &str, what: &str) -> Result<()> {
-    let ok = !name.is_empty()
-        && name
-            .chars()
-            .all(|c| c.is_alphanumeric() || matches!(c, '-' | '_' | '.' | '+'))
-        && name != "."
-        && name != ".."
-        && name != "plots";
-    if ok {
-        Ok(())
-    } else {
-        Err(AppError::setting(
-            what,
-            format!(
-                "{name:?} cannot name a folder of box files: use letters, digits, -, _, . or + \
-                 (and not `plots`)"
-            ),
-        ))
-    }
-}
-
-/// The name of the sequence in folder `dir`: the folder's name.
-fn sequence_name(dir: &Path) -> String {
-    dir.file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| dir.display().to_string())
-}
-
 /// The ground truth of an OTB folder, checked against its frame count.
 fn truth_of(dir: &Path, frames: usize) -> Result<Vec<Option<BoundingBox>>> {
     let sequence = open_sequence(&dir.to_string_lossy())?;
@@ -225,43 +172,6 @@ fn truth_of(dir: &Path, frames: usize) -> Result<Vec<Option<BoundingBox>>> {
     let truth = load_groundtruth(&gt_path)?;
     check_groundtruth_len(&truth, frames, &gt_path)?;
     Ok(truth)
-}
-
-/// Checks a sequence as `track eval otb` does (every frame decoded, the ground truth's length,
-/// its first box in the frame, something to score) and lays out its runs.
-fn prepare(dir: &Path, protocols: &[Protocol]) -> Result<Prepared> {
-    let sequence = open_sequence(&dir.to_string_lossy())?;
-    let gt_path = sequence.groundtruth.clone().ok_or_else(|| {
-        AppError::input(dir, "not an OTB folder: groundtruth_rect.txt is missing")
-    })?;
-    let info = sequence.source.validate_all()?;
-    let truth = load_groundtruth(&gt_path)?;
-    check_groundtruth_len(&truth, info.frames, &gt_path)?;
-    first_box_in_frame(&truth, &gt_path, &sequence.name, info.width, info.height)?;
-    let starts: Vec<Vec<RunStart>> = protocols.iter().map(|&p| run_starts(&truth, p)).collect();
-    for (p, runs) in protocols.iter().zip(&starts) {
-        let scorable = runs
-            .iter()
-            .any(|r| truth[r.frame + 1..].iter().any(Option::is_some));
-        if !scorable {
-            return Err(AppError::input(
-                &gt_path,
-                format!(
-                    "no labelled frame after the start frame of any {} run of sequence {}: \
-                     nothing to score (the start frame is given, not tracked)",
-                    p.title(),
-                    sequence.name
-                ),
-            ));
-        }
-    }
-    Ok(Prepared {
-        dir: dir.to_path_buf(),
-        name: sequence_name(dir),
-        frames: info.frames,
-        truth,
-        starts,
-    })
 }
 
 /// The protocols sorted, without repeats, as `track eval otb` runs them.
@@ -292,7 +202,7 @@ pub fn plan(
     let protocols = sorted(protocols);
     let prepared: Vec<Prepared> = sequences
         .iter()
-        .map(|d| prepare(d, &protocols))
+        .map(|d| prepare(d, None, &protocols, 1))
         .collect::<Result<_>>()?;
     check_distinct(&prepared)?;
     let mut specs = Vec::new();
@@ -317,23 +227,6 @@ pub fn plan(
         }
     }
     Ok(specs)
-}
-
-/// Two sequences of one name would write the same box files.
-fn check_distinct(prepared: &[Prepared]) -> Result<()> {
-    for (i, p) in prepared.iter().enumerate() {
-        if prepared[..i].iter().any(|q| q.name == p.name) {
-            return Err(AppError::setting(
-                "SEQUENCES",
-                format!(
-                    "two sequences are named {} ({}): their box files would collide",
-                    p.name,
-                    p.dir.display()
-                ),
-            ));
-        }
-    }
-    Ok(())
 }
 
 /// Tracks one run of a [`plan`]: the sequence read from its first frame, the tracker started on
@@ -388,20 +281,9 @@ pub fn run(spec: &RunSpec) -> Result<RunResult> {
     let output = session.finish();
     Ok(RunResult {
         boxes: output.records.iter().map(|r| r.bbox).collect(),
-        p_lost: output
-            .records
-            .iter()
-            .map(|r| r.alpha_probs.get(LOST_INDEX).copied())
-            .collect(),
+        p_lost: output.records.iter().map(p_lost_of).collect(),
         seconds: output.seconds,
     })
-}
-
-/// One run scored, as `track eval otb` scores it.
-struct Outcome {
-    boxes: Vec<Option<BoundingBox>>,
-    metrics: SequenceMetrics,
-    seconds: f64,
 }
 
 /// Scores a run's result against the truth; `None` when no labelled frame follows its start.
@@ -409,7 +291,7 @@ fn outcome(
     spec: &RunSpec,
     result: &RunResult,
     truth: &[Option<BoundingBox>],
-) -> Result<Option<Outcome>> {
+) -> Result<Option<RunOutcome>> {
     let start = spec.start;
     if result.boxes.len() + start != truth.len() || result.p_lost.len() != result.boxes.len() {
         return Err(AppError::computation(
@@ -423,25 +305,7 @@ fn outcome(
             ),
         ));
     }
-    let boxes: Vec<Option<BoundingBox>> = std::iter::repeat_n(None, start)
-        .chain(result.boxes.iter().copied().map(Some))
-        .collect();
-    let seconds = result.seconds.max(1e-9);
-    let Some(metrics) = score_run(&boxes, truth, start, Some(seconds))? else {
-        return Ok(None);
-    };
-    // The self-evaluation over the scored frames (those after the start).
-    let metrics = with_self_evaluation(
-        metrics,
-        &result.boxes[1.min(result.boxes.len())..],
-        &truth[start + 1..],
-        &result.p_lost[1.min(result.p_lost.len())..],
-    );
-    Ok(Some(Outcome {
-        boxes,
-        metrics,
-        seconds,
-    }))
+    score_tracked(&result.boxes, &result.p_lost, truth, start, result.seconds)
 }
 
 /// The tables of one protocol: `otb.md` and `otb.csv` as `track eval otb` writes them.
@@ -493,6 +357,8 @@ pub fn score(
         prepared.push(Prepared {
             dir: dir.clone(),
             name: sequence_name(dir),
+            clip: sequence_name(dir),
+            transform: None,
             frames,
             truth,
             starts,
@@ -500,7 +366,7 @@ pub fn score(
     }
     check_distinct(&prepared)?;
     // scored[protocol] holds (sequence, tracker, outcomes), every run found by its spec.
-    let mut scored: Vec<Vec<(usize, &str, Vec<Outcome>)>> =
+    let mut scored: Vec<Vec<(usize, String, Vec<RunOutcome>)>> =
         protocols.iter().map(|_| Vec::new()).collect();
     for (si, seq) in prepared.iter().enumerate() {
         for (pi, &protocol) in protocols.iter().enumerate() {
@@ -533,94 +399,21 @@ pub fn score(
                         mine.push(o);
                     }
                 }
-                scored[pi].push((si, name, mine));
+                scored[pi].push((si, name.to_owned(), mine));
             }
         }
     }
-    let mut sections = Vec::new();
-    for (pi, &protocol) in protocols.iter().enumerate() {
-        let mut rows = Vec::new();
-        for name in &names {
-            for (si, seq) in prepared.iter().enumerate() {
-                let Some((_, _, outcomes)) =
-                    scored[pi].iter().find(|(s, n, _)| *s == si && n == name)
-                else {
-                    continue;
-                };
-                let runs: Vec<(SequenceMetrics, Option<f64>)> = outcomes
-                    .iter()
-                    .map(|o| (o.metrics.clone(), Some(o.seconds)))
-                    .collect();
-                if let Some(metrics) = mean_over_runs(&runs) {
-                    rows.push(SequenceScore {
-                        sequence: seq.name.clone(),
-                        tracker: (*name).to_owned(),
-                        runs: runs.len(),
-                        metrics,
-                    });
-                }
-            }
-        }
-        let means = set_means(&rows);
-        let charts = crate::otb::plots::protocol_charts(protocol, &rows, &means)?;
-        let ceiling = if protocol == Protocol::Sre {
-            convention_ceiling(&prepared, pi)?
-        } else {
-            None
-        };
-        sections.push((protocol, rows, means, charts, ceiling));
-    }
-    let mut tables = Vec::new();
-    for (protocol, rows, _, charts, ceiling) in &sections {
-        let dir = out.join(protocol.name());
-        let mut md = markdown(*protocol, rows);
-        if let Some(c) = ceiling {
-            md.push_str(&format!("\n{}\n", ceiling_sentence(*c)));
-        }
-        let table = csv(*protocol, rows);
-        write_atomic(&dir.join("otb.md"), md.as_bytes())?;
-        write_atomic(&dir.join("otb.csv"), table.as_bytes())?;
-        for c in charts {
-            write_atomic(&dir.join("plots").join(&c.file), c.svg.as_bytes())?;
-        }
-        tables.push(ProtocolTables {
-            protocol: *protocol,
-            markdown: md,
-            csv: table,
-        });
-    }
-    let page_sections: Vec<crate::otb::page::ProtocolSection<'_>> = sections
-        .iter()
-        .map(
-            |(protocol, rows, means, charts, ceiling)| crate::otb::page::ProtocolSection {
-                protocol: *protocol,
-                rows,
-                means,
-                charts,
-                ceiling: *ceiling,
-            },
-        )
+    let sections = sections(&protocols, &names, &prepared, &scored)?;
+    let tables = write_tables(out, &sections, &prepared, "")?
+        .into_iter()
+        .map(|(protocol, markdown, csv)| ProtocolTables {
+            protocol,
+            markdown,
+            csv,
+        })
         .collect();
-    write_atomic(
-        &out.join("index.html"),
-        crate::otb::page::render(command, &page_sections).as_bytes(),
-    )?;
+    write_page(out, command, &sections)?;
     Ok(tables)
-}
-
-/// The success AUC of the truth in each run's start convention, averaged as the tables average a
-/// tracker's runs; `None` without a scored run (as `track eval otb` computes it).
-fn convention_ceiling(prepared: &[Prepared], pi: usize) -> Result<Option<f64>> {
-    let mut sequences = Vec::new();
-    for seq in prepared {
-        let mut runs = Vec::new();
-        for start in &seq.starts[pi] {
-            let boxes = in_start_convention(&seq.truth, start);
-            runs.extend(score_run(&boxes, &seq.truth, start.frame, None)?);
-        }
-        sequences.extend(mean_metrics(&runs));
-    }
-    Ok(mean_metrics(&sequences).map(|m| m.success_auc))
 }
 
 #[cfg(test)]

@@ -5,9 +5,8 @@ use std::path::Path;
 use trackers::TrackerConfig;
 use vision_core::{BoundingBox, Ellipse};
 
-use crate::commands::run::prepare_out;
-use crate::groundtruth::{BoxInFrame, check_groundtruth_len, first_box_in_frame, load_groundtruth};
-use crate::metrics::{SequenceMetrics, score_run};
+use crate::commands::run::{checked_truth, prepare_out, score};
+use crate::groundtruth::{BoxInFrame, first_box_in_frame};
 use crate::record::{
     CsvColumns, FrameRecord, Summary, status_counts, write_summary, write_track_tables,
 };
@@ -69,14 +68,7 @@ pub fn track_video(
         let info = sequence.source.validate_all()?;
         (Some(info.frames), info.width, info.height)
     };
-    let truth = match (&sequence.groundtruth, known_frames) {
-        (Some(path), Some(frames)) => {
-            let t = load_groundtruth(path)?;
-            check_groundtruth_len(&t, frames, path)?;
-            Some(t)
-        }
-        _ => None,
-    };
+    let truth = checked_truth(sequence.groundtruth.as_deref(), known_frames)?;
     let (start, ellipse) = match (init, truth.as_deref()) {
         (Some(b), _) => {
             b.validate_in_frame(width, height, "init")?;
@@ -171,20 +163,6 @@ pub fn track_video(
 /// The box of the initial contour, as `summary.json` gives it.
 fn ellipse_box(e: &Ellipse) -> BoundingBox {
     e.bounding_box()
-}
-
-/// The scores of `track run` against the ground truth: the start frame is given, not tracked,
-/// so it is not scored; `None` when no labelled frame follows it.
-fn score(
-    start: usize,
-    records: &[FrameRecord],
-    truth: &[Option<BoundingBox>],
-    seconds: f64,
-) -> Result<Option<SequenceMetrics>> {
-    let predicted: Vec<Option<BoundingBox>> = std::iter::repeat_n(None, start)
-        .chain(records.iter().map(|r| Some(r.bbox)))
-        .collect();
-    score_run(&predicted, truth, start, Some(seconds.max(1e-9)))
 }
 
 #[cfg(test)]

@@ -26,27 +26,36 @@ use crate::{AppError, Result};
 const LOST_INDEX: usize = 2;
 
 /// A sequence checked before any tracking.
-struct Prepared {
-    dir: PathBuf,
-    name: String,
+pub(crate) struct Prepared {
+    pub(crate) dir: PathBuf,
+    pub(crate) name: String,
     /// The clip's folder name, and its transform in a stress suite ([`super::suite`]).
-    clip: String,
-    transform: Option<String>,
+    pub(crate) clip: String,
+    pub(crate) transform: Option<String>,
     /// The sequence's frames, all of them.
-    frames: usize,
+    pub(crate) frames: usize,
     /// The ground truth of the frames kept (every `--frame-step`-th).
-    truth: Vec<Option<BoundingBox>>,
+    pub(crate) truth: Vec<Option<BoundingBox>>,
     /// The runs of each protocol asked for, in the order of `protocols`.
-    starts: Vec<Vec<RunStart>>,
+    pub(crate) starts: Vec<Vec<RunStart>>,
 }
 
 /// One run's outcome.
-struct RunOutcome {
+pub(crate) struct RunOutcome {
     /// The box on every frame of the sequence (`None` before the start).
-    boxes: Vec<Option<BoundingBox>>,
-    metrics: SequenceMetrics,
-    seconds: Option<f64>,
+    pub(crate) boxes: Vec<Option<BoundingBox>>,
+    pub(crate) metrics: SequenceMetrics,
+    pub(crate) seconds: Option<f64>,
 }
+
+/// One protocol's rows, each tracker's means, charts and SRE ceiling.
+pub(crate) type Section = (
+    Protocol,
+    Vec<SequenceScore>,
+    Vec<SequenceScore>,
+    Vec<super::plots::Chart>,
+    Option<f64>,
+);
 
 /// A name used as a folder of box files: letters, digits, `-`, `_`, `.` and `+`, not `.`, `..`
 /// or `plots`.
@@ -71,6 +80,22 @@ fn check_name(name: &str, what: &str) -> Result<()> {
     }
 }
 
+/// Checks the trackers' names in order ([`check_name`], none given twice) and returns them.
+pub(crate) fn check_names<'a>(all: impl IntoIterator<Item = &'a str>) -> Result<Vec<&'a str>> {
+    let mut names: Vec<&str> = Vec::new();
+    for name in all {
+        check_name(name, "--tracker")?;
+        if names.contains(&name) {
+            return Err(AppError::setting(
+                "--tracker",
+                format!("{name} is given twice (trackers and --results names must differ)"),
+            ));
+        }
+        names.push(name);
+    }
+    Ok(names)
+}
+
 /// Parses the `--results NAME=DIR` values.
 fn parse_results(values: &[String]) -> Result<Vec<(String, PathBuf)>> {
     values
@@ -90,7 +115,7 @@ fn parse_results(values: &[String]) -> Result<Vec<(String, PathBuf)>> {
 
 /// Reads a sequence's ground truth and frame count, checks its first box against the frame, keeps
 /// every `step`-th frame's line from the first, and lays out the runs of each protocol on those.
-fn prepare(
+pub(crate) fn prepare(
     dir: &Path,
     transform: Option<&str>,
     protocols: &[Protocol],
@@ -146,6 +171,23 @@ fn prepare(
     })
 }
 
+/// Two sequences of one name would write the same box files.
+pub(crate) fn check_distinct(prepared: &[Prepared]) -> Result<()> {
+    for (i, p) in prepared.iter().enumerate() {
+        if prepared[..i].iter().any(|q| q.name == p.name) {
+            return Err(AppError::setting(
+                "SEQUENCES",
+                format!(
+                    "two sequences are named {} ({}): their box files would collide",
+                    p.name,
+                    p.dir.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Tracks one run: `config` started at `start` on `frames` (the whole sequence).
 fn track_run(
     frames: &[Frame],
@@ -161,22 +203,40 @@ fn track_run(
         session.push(frame, &init, None)?;
     }
     let output = session.finish();
-    let boxes: Vec<Option<BoundingBox>> = std::iter::repeat_n(None, start.frame)
-        .chain(output.records.iter().map(|r| Some(r.bbox)))
+    let tracked: Vec<BoundingBox> = output.records.iter().map(|r| r.bbox).collect();
+    let p_lost: Vec<Option<f64>> = output.records.iter().map(p_lost_of).collect();
+    score_tracked(&tracked, &p_lost, truth, start.frame, output.seconds)
+}
+
+/// P(lost) of a record: its `alpha_probs` entry for the lost status, `None` without one.
+pub(crate) fn p_lost_of(record: &crate::record::FrameRecord) -> Option<f64> {
+    record.alpha_probs.get(LOST_INDEX).copied()
+}
+
+/// Scores a run tracked from frame `start`: `tracked` and `p_lost` hold the box and P(lost) of
+/// every tracked frame, the start frame first, and `seconds` the tracking time. `None` when no
+/// labelled frame follows the start.
+pub(crate) fn score_tracked(
+    tracked: &[BoundingBox],
+    p_lost: &[Option<f64>],
+    truth: &[Option<BoundingBox>],
+    start: usize,
+    seconds: f64,
+) -> Result<Option<RunOutcome>> {
+    let boxes: Vec<Option<BoundingBox>> = std::iter::repeat_n(None, start)
+        .chain(tracked.iter().copied().map(Some))
         .collect();
-    let seconds = output.seconds.max(1e-9);
-    let Some(metrics) = score_run(&boxes, truth, start.frame, Some(seconds))? else {
+    let seconds = seconds.max(1e-9);
+    let Some(metrics) = score_run(&boxes, truth, start, Some(seconds))? else {
         return Ok(None);
     };
     // The self-evaluation over the scored frames (those after the start).
-    let tracked: Vec<BoundingBox> = output.records.iter().skip(1).map(|r| r.bbox).collect();
-    let p_lost: Vec<Option<f64>> = output
-        .records
-        .iter()
-        .skip(1)
-        .map(|r| r.alpha_probs.get(LOST_INDEX).copied())
-        .collect();
-    let metrics = with_self_evaluation(metrics, &tracked, &truth[start.frame + 1..], &p_lost);
+    let metrics = with_self_evaluation(
+        metrics,
+        &tracked[1.min(tracked.len())..],
+        &truth[start + 1..],
+        &p_lost[1.min(p_lost.len())..],
+    );
     Ok(Some(RunOutcome {
         boxes,
         metrics,
@@ -187,7 +247,7 @@ fn track_run(
 /// The success AUC of the truth in each run's start convention ([`in_start_convention`]),
 /// averaged as the tables average a tracker's runs ([`mean_metrics`]: over each sequence's runs,
 /// then over sequences); `None` without a scored run.
-fn convention_ceiling(prepared: &[Prepared], pi: usize) -> Result<Option<f64>> {
+pub(crate) fn convention_ceiling(prepared: &[Prepared], pi: usize) -> Result<Option<f64>> {
     let mut sequences = Vec::new();
     for seq in prepared {
         let mut runs = Vec::new();
@@ -245,21 +305,12 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
     let mut protocols = protocols.to_vec();
     protocols.sort();
     protocols.dedup();
-    let mut names: Vec<&str> = Vec::new();
-    for name in configs
-        .iter()
-        .map(|c| c.name.as_str())
-        .chain(results.iter().map(|r| r.0.as_str()))
-    {
-        check_name(name, "--tracker")?;
-        if names.contains(&name) {
-            return Err(AppError::setting(
-                "--tracker",
-                format!("{name} is given twice (trackers and --results names must differ)"),
-            ));
-        }
-        names.push(name);
-    }
+    let names = check_names(
+        configs
+            .iter()
+            .map(|c| c.name.as_str())
+            .chain(results.iter().map(|r| r.0.as_str())),
+    )?;
     let mut inputs: Vec<&Path> = sequences.iter().map(PathBuf::as_path).collect();
     inputs.extend(results.iter().map(|r| r.1.as_path()));
     inputs.extend(config_files.iter().map(PathBuf::as_path));
@@ -278,18 +329,7 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
         .iter()
         .map(|e| prepare(&e.dir, e.transform.as_deref(), &protocols, step))
         .collect::<Result<_>>()?;
-    for (i, p) in prepared.iter().enumerate() {
-        if prepared[..i].iter().any(|q| q.name == p.name) {
-            return Err(AppError::setting(
-                "SEQUENCES",
-                format!(
-                    "two sequences are named {} ({}): their box files would collide",
-                    p.name,
-                    p.dir.display()
-                ),
-            ));
-        }
-    }
+    check_distinct(&prepared)?;
     // Other trackers' boxes, read and scored before any tracking, so that a missing file is
     // found at once. rows[protocol] holds (sequence, tracker, runs' outcomes) in a fixed order.
     let mut scored: Vec<Vec<(usize, String, Vec<RunOutcome>)>> =
@@ -388,11 +428,58 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
     }
     bar.finish_and_clear();
     let interrupted = signals.received().filter(|_| finished < total);
-    // Rows in a fixed order: trackers (presets, configurations, then --results), sequences.
+    let sections = sections(&protocols, &names, &prepared, &scored)?;
+    // The notes above each table, the frame step's first.
+    let mut head = String::new();
+    if step > 1 {
+        head.push_str(&format!(
+            "One frame in {step} of each sequence, from its first (`--frame-step {step}`): \
+             the footage at 1/{step} of its frame rate.\n\n"
+        ));
+    }
+    if let Some((signal, _)) = interrupted {
+        head.push_str(&format!(
+            "**Interrupted by {signal}**: {finished} of {total} tracker runs finished; these \
+             tables hold those runs only (each row's `runs` column says how many).\n\n"
+        ));
+    }
+    let mut printed = String::new();
+    for (protocol, md, _) in write_tables(out, &sections, &prepared, &head)? {
+        printed.push_str(&format!("## {}\n\n{md}\n", protocol.title()));
+    }
+    let mut command = std::env::args().collect::<Vec<_>>().join(" ");
+    if let Some((signal, _)) = interrupted {
+        command.push_str(&format!(
+            " — interrupted by {signal}: {finished} of {total} runs finished"
+        ));
+    }
+    write_page(out, &command, &sections)?;
+    crate::output::print_stdout(&printed)?;
+    match interrupted {
+        Some((signal, number)) => Err(AppError::InterruptedRuns {
+            signal,
+            number,
+            runs: finished,
+            total,
+            out: out.to_path_buf(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Each protocol's rows, means, charts and SRE ceiling, from `scored[protocol]` (sequence,
+/// tracker, runs' outcomes). Rows in a fixed order: trackers (in the order of `names`), then
+/// sequences.
+pub(crate) fn sections(
+    protocols: &[Protocol],
+    names: &[&str],
+    prepared: &[Prepared],
+    scored: &[Vec<(usize, String, Vec<RunOutcome>)>],
+) -> Result<Vec<Section>> {
     let mut sections = Vec::new();
     for (pi, &protocol) in protocols.iter().enumerate() {
         let mut rows = Vec::new();
-        for name in &names {
+        for name in names {
             for (si, seq) in prepared.iter().enumerate() {
                 let Some((_, _, outcomes)) = scored[pi]
                     .iter()
@@ -417,12 +504,23 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
         let means = set_means(&rows);
         let charts = super::plots::protocol_charts(protocol, &rows, &means)?;
         let ceiling = if protocol == Protocol::Sre {
-            convention_ceiling(&prepared, pi)?
+            convention_ceiling(prepared, pi)?
         } else {
             None
         };
         sections.push((protocol, rows, means, charts, ceiling));
     }
+    Ok(sections)
+}
+
+/// Writes each protocol's `otb.md` (with `head` above it), `otb.csv` and plots into `out`, and
+/// under a stress suite its `suite.md` and `suite.csv`; returns each protocol's markdown and csv.
+pub(crate) fn write_tables(
+    out: &Path,
+    sections: &[Section],
+    prepared: &[Prepared],
+    head: &str,
+) -> Result<Vec<(Protocol, String, String)>> {
     let groups: Vec<(String, String)> = prepared
         .iter()
         .map(|p| {
@@ -430,8 +528,8 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
             (p.name.clone(), g.to_owned())
         })
         .collect();
-    let mut printed = String::new();
-    for (protocol, rows, _, charts, ceiling) in &sections {
+    let mut tables = Vec::new();
+    for (protocol, rows, _, charts, ceiling) in sections {
         let dir = out.join(protocol.name());
         let mut md = markdown(*protocol, rows);
         // Under a stress suite: the mean per transform before the per-clip tables.
@@ -447,25 +545,20 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
         if let Some(c) = ceiling {
             md.push_str(&format!("\n{}\n", ceiling_sentence(*c)));
         }
-        if let Some((signal, _)) = interrupted {
-            md = format!(
-                "**Interrupted by {signal}**: {finished} of {total} tracker runs finished; these \
-                 tables hold those runs only (each row's `runs` column says how many).\n\n{md}"
-            );
-        }
-        if step > 1 {
-            md = format!(
-                "One frame in {step} of each sequence, from its first (`--frame-step {step}`): \
-                 the footage at 1/{step} of its frame rate.\n\n{md}"
-            );
-        }
+        let md = format!("{head}{md}");
+        let table = csv(*protocol, rows);
         write_atomic(&dir.join("otb.md"), md.as_bytes())?;
-        write_atomic(&dir.join("otb.csv"), csv(*protocol, rows).as_bytes())?;
+        write_atomic(&dir.join("otb.csv"), table.as_bytes())?;
         for c in charts {
             write_atomic(&dir.join("plots").join(&c.file), c.svg.as_bytes())?;
         }
-        printed.push_str(&format!("## {}\n\n{md}\n", protocol.title()));
+        tables.push((*protocol, md, table));
     }
+    Ok(tables)
+}
+
+/// Writes `index.html`, headed by `command`.
+pub(crate) fn write_page(out: &Path, command: &str, sections: &[Section]) -> Result<()> {
     let page_sections: Vec<super::page::ProtocolSection<'_>> = sections
         .iter()
         .map(
@@ -478,25 +571,8 @@ pub fn run(evaluation: Evaluation<'_>) -> Result<()> {
             },
         )
         .collect();
-    let mut command = std::env::args().collect::<Vec<_>>().join(" ");
-    if let Some((signal, _)) = interrupted {
-        command.push_str(&format!(
-            " — interrupted by {signal}: {finished} of {total} runs finished"
-        ));
-    }
     write_atomic(
         &out.join("index.html"),
-        super::page::render(&command, &page_sections).as_bytes(),
-    )?;
-    crate::output::print_stdout(&printed)?;
-    match interrupted {
-        Some((signal, number)) => Err(AppError::InterruptedRuns {
-            signal,
-            number,
-            runs: finished,
-            total,
-            out: out.to_path_buf(),
-        }),
-        None => Ok(()),
-    }
+        super::page::render(command, &page_sections).as_bytes(),
+    )
 }

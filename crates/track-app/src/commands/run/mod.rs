@@ -24,6 +24,7 @@ pub mod settings;
 mod thinned;
 
 pub use crate::progress::{progress, progress_of, progress_to, rate_in, rate_text};
+pub(crate) use outputs::score;
 pub use outputs::{OUTPUT_FILES, gif_delay_ms, prepare_out};
 pub use settings::{
     AXIS_ANGLE_TOLERANCE, MAX_EDGE_THRESHOLD, Overrides, initial_ellipse_for, parse_box,
@@ -289,14 +290,7 @@ impl CheckedInput {
             )?;
             (Some(info.frames), info.width, info.height)
         };
-        let truth = match (&sequence.groundtruth, known_frames) {
-            (Some(path), Some(frames)) => {
-                let t = load_groundtruth(path)?;
-                check_groundtruth_len(&t, frames, path)?;
-                Some(t)
-            }
-            _ => None,
-        };
+        let truth = checked_truth(sequence.groundtruth.as_deref(), known_frames)?;
         let (start, init) =
             initial_contour(args, &config, &sequence, truth.as_deref(), (width, height))?;
         let input = Self {
@@ -313,6 +307,22 @@ impl CheckedInput {
             groundtruth: sequence.groundtruth.clone(),
         };
         Ok((input, sequence.source))
+    }
+}
+
+/// The ground truth of a sequence whose frames are counted, checked against their count; `None`
+/// for a stream or a sequence without one.
+pub(crate) fn checked_truth(
+    groundtruth: Option<&Path>,
+    known_frames: Option<usize>,
+) -> Result<Option<Vec<Option<BoundingBox>>>> {
+    match (groundtruth, known_frames) {
+        (Some(path), Some(frames)) => {
+            let t = load_groundtruth(path)?;
+            check_groundtruth_len(&t, frames, path)?;
+            Ok(Some(t))
+        }
+        _ => Ok(None),
     }
 }
 

@@ -442,7 +442,7 @@ impl Kept {
 /// Scores the tracked frames against the ground truth with the one scorer of `track eval otb`
 /// ([`score_run`]): the start frame is given, not tracked, so it is not scored. `None` when no
 /// labelled frame follows it.
-fn score(
+pub(crate) fn score(
     start: usize,
     records: &[FrameRecord],
     truth: &[Option<BoundingBox>],
