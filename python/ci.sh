@@ -29,14 +29,12 @@ if [ -z "${TRACK_BIN:-}" ] && ! has_track_bin; then
 fi
 export CONTOUR_TRACK_REQUIRE_TRACK_BIN=1
 start=$(date +%s)
-# CI checks behaviour, not speed: the release build at opt-level 1, without link-time
-# optimisation and in many codegen units, compiles several times faster on two cores and
-# computes the same numbers (no fast-math anywhere; the determinism tests compare its boxes with
-# the debug `track`'s).
+# CI checks behaviour, not speed: the release build without link-time optimisation and in many
+# codegen units compiles several times faster on two cores and computes the same numbers (no
+# fast-math anywhere; the determinism tests compare its boxes with the debug `track`'s).
 # `pip install ./python` for users keeps the optimised profile of python/Cargo.toml.
 if [ -n "${CI:-}" ]; then
-    export CARGO_PROFILE_RELEASE_LTO=false CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16 \
-        CARGO_PROFILE_RELEASE_OPT_LEVEL=1
+    export CARGO_PROFILE_RELEASE_LTO=false CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16
 fi
 "$venv/bin/python" -m pip install --quiet --upgrade pip
 "$venv/bin/python" -m pip install --quiet "$repo/python[dask]" pytest numpy
