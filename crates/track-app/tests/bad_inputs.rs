@@ -62,6 +62,22 @@ fn paired(base: &[&Path], variant: &[&Path], extra: &[&str]) -> std::process::Ou
     track(&args)
 }
 
+/// `track run INPUT [EXTRA…] --tracker m1 --particles 20 --out OUT --quiet`: a quick run.
+fn run_m1(input: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["run", s(input)];
+    args.extend_from_slice(extra);
+    args.extend([
+        "--tracker",
+        "m1",
+        "--particles",
+        "20",
+        "--out",
+        s(out),
+        "--quiet",
+    ]);
+    track(&args)
+}
+
 #[test]
 fn a_paired_report_never_replaces_a_file_of_the_users() {
     let dir = tempfile::tempdir().unwrap();
@@ -117,34 +133,13 @@ fn a_run_refuses_an_output_folder_inside_its_sequence() {
     let seq = otb_folder(dir.path(), "seq", 4);
     let before = files(&seq);
     let img = seq.join("img");
-    let o = track(&[
-        "run",
-        s(&seq),
-        "--tracker",
-        "m1",
-        "--particles",
-        "20",
-        "--gif",
-        "--out",
-        s(&img),
-        "--quiet",
-    ]);
+    let o = run_m1(&seq, &img, &["--gif"]);
     assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
     assert!(one_error_line(&o).contains("inside the input folder"));
     assert_eq!(files(&seq), before);
     // The sequence still runs.
     let out = dir.path().join("out");
-    let o = track(&[
-        "run",
-        s(&seq),
-        "--tracker",
-        "m1",
-        "--particles",
-        "20",
-        "--out",
-        s(&out),
-        "--quiet",
-    ]);
+    let o = run_m1(&seq, &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
@@ -198,37 +193,13 @@ fn a_broken_frame_link_is_an_error_and_macos_metadata_is_not_a_frame() {
     // macOS's AppleDouble file beside a frame: not an image at all.
     std::fs::write(frames.join("._0001.png"), b"\x00\x05\x16\x07 metadata").unwrap();
     let out = dir.path().join("out");
-    let o = track(&[
-        "run",
-        s(&frames),
-        "--init",
-        DISC_INIT,
-        "--tracker",
-        "m1",
-        "--particles",
-        "20",
-        "--out",
-        s(&out),
-        "--quiet",
-    ]);
+    let o = run_m1(&frames, &out, &["--init", DISC_INIT]);
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("track.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 4, "{csv}");
     // A link to nothing, named as a frame: an error naming it (exit 3), as a 0-byte frame is.
     std::os::unix::fs::symlink(dir.path().join("gone.png"), frames.join("0003b.png")).unwrap();
-    let o = track(&[
-        "run",
-        s(&frames),
-        "--init",
-        DISC_INIT,
-        "--tracker",
-        "m1",
-        "--particles",
-        "20",
-        "--out",
-        s(&out),
-        "--quiet",
-    ]);
+    let o = run_m1(&frames, &out, &["--init", DISC_INIT]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     let e = one_error_line(&o);
     assert!(
