@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The Python package's CI: a fresh virtual environment, `pip install "./python[dask]" pytest numpy`
-# (which builds the Rust code in release mode through maturin, and installs Dask for
-# contour_track.cluster and its tests), then pytest with its summary.
+# The Python package's CI: a fresh virtual environment, `pip install "./python[dask]" pytest
+# numpy` (which builds the Rust code through maturin with the workspace's test profile, and
+# installs Dask for contour_track.cluster and its tests), then pytest with its summary.
 #
 # The determinism tests compare the binding's boxes with `track run`'s: they use $TRACK_BIN, or
 # the newest executable target/*/track of the repository (built here when there is none;
@@ -29,13 +29,13 @@ if [ -z "${TRACK_BIN:-}" ] && ! has_track_bin; then
 fi
 export CONTOUR_TRACK_REQUIRE_TRACK_BIN=1
 start=$(date +%s)
-# CI checks behaviour, not speed: the release build without link-time optimisation and in many
-# codegen units compiles several times faster on two cores and computes the same numbers (no
-# fast-math anywhere; the determinism tests compare its boxes with the debug `track`'s).
-# `pip install ./python` for users keeps the optimised profile of python/Cargo.toml.
-if [ -n "${CI:-}" ]; then
-    export CARGO_PROFILE_RELEASE_LTO=false CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16
-fi
+# The tests check behaviour, not speed: the extension is built with the workspace's test profile
+# (optimised, with debug assertions) into the workspace's target folder, where every crate the
+# workspace's tests compiled is reused (the Python package is a workspace member; python/Cargo.toml
+# lines up the features of the shared dependencies), so only pyo3, numpy and the extension are
+# compiled here. The numbers are the release build's (no fast-math anywhere; the determinism tests
+# compare its boxes with `track`'s). `pip install ./python` for users builds the release profile.
+export MATURIN_PEP517_ARGS="--profile test"
 "$venv/bin/python" -m pip install --quiet --upgrade pip
 "$venv/bin/python" -m pip install --quiet "$repo/python[dask]" pytest numpy
 echo "python/ci.sh: pip install took $(( $(date +%s) - start )) s"
