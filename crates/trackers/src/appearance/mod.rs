@@ -354,7 +354,7 @@ impl Appearance {
     /// area and the reference template.
     pub fn read(&mut self, frame: &Frame<'_>, estimate: &Ellipse) {
         let s = &self.settings;
-        let whole = s.whole_frame_while_lost && self.lock.p_lost() > 0.5;
+        let whole = self.next_window(estimate).is_none();
         read_window(s, &mut self.window, frame, &self.bins, estimate, whole);
         let mut target = self.initial_target.clone();
         target.blend(&self.target, s.learnt_share);
@@ -371,6 +371,17 @@ impl Appearance {
                 .zip(&self.template)
                 .map(|(a, b)| ((1.0 - share) * f64::from(*a) + share * f64::from(*b)) as f32),
         );
+    }
+
+    /// The part of the next frame the next [`Appearance::read`] around `estimate` reads,
+    /// `[x0, y0, x1, y1]` before clipping to the frame: the window around it, or `None` for the
+    /// whole frame (read while the target is believed lost, when
+    /// [`AppearanceSettings::whole_frame_while_lost`]). Its colour is all the terms read of a
+    /// frame after the first.
+    pub fn next_window(&self, estimate: &Ellipse) -> Option<[f64; 4]> {
+        let s = &self.settings;
+        let whole = s.whole_frame_while_lost && self.lock.p_lost() > 0.5;
+        (!whole).then(|| window_around(s, estimate))
     }
 
     /// A buffer for [`Appearance::template_similarity`]'s samples.
@@ -509,6 +520,14 @@ impl Appearance {
     }
 }
 
+/// The window around `e`, `[x0, y0, x1, y1]`: `search` half-axes each way (before clipping to
+/// the frame).
+fn window_around(s: &AppearanceSettings, e: &Ellipse) -> [f64; 4] {
+    let (hw, hh) = e.half_extents();
+    let (hx, hy) = (s.search * hw, s.search * hh);
+    [e.cx - hx, e.cy - hy, e.cx + hx, e.cy + hy]
+}
+
 /// Reads the window of `frame` around `e` (the whole frame when `whole`).
 fn read_window(
     s: &AppearanceSettings,
@@ -522,9 +541,7 @@ fn read_window(
     let rect = if whole {
         [0.0, 0.0, fw, fh]
     } else {
-        let (hw, hh) = e.half_extents();
-        let (hx, hy) = (s.search * hw, s.search * hh);
-        [e.cx - hx, e.cy - hy, e.cx + hx, e.cy + hy]
+        window_around(s, e)
     };
     let area = (rect[2].min(fw) - rect[0].max(0.0)) * (rect[3].min(fh) - rect[1].max(0.0));
     // One window pixel per pixel of the tracker's frame, which the working scale has already

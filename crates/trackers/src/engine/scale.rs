@@ -233,18 +233,38 @@ impl Shrinker {
 
     /// Shrinks the colour of a frame (`order`: where R, G and B sit in each pixel) into
     /// interleaved RGB (`rgb`), each channel averaged as the grey levels are
-    /// ([`Shrinker::shrink_into`]) and rounded to the nearest level. The three channels go
-    /// through each pass together, reading the frame once; every channel's sums are taken in
-    /// the same order as one channel's alone, so the levels are the same to the bit.
-    fn shrink_colour(&mut self, rgb: &[u8], order: [usize; 3]) {
-        let (w, h) = self.size;
+    /// ([`Shrinker::shrink_into`]) and rounded to the nearest level; only the working pixels of
+    /// `region` (`[x0, y0, x1, y1]` in working pixels, widened by one pixel each way and clipped;
+    /// `None`: all), the others black. The three channels go through each pass together,
+    /// reading the frame once; every channel's sums are taken in the same order as one
+    /// channel's alone, so the levels are the same to the bit, whatever the region.
+    fn shrink_colour(&mut self, rgb: &[u8], order: [usize; 3], region: Option<[f64; 4]>) {
+        let (w, _) = self.size;
         let (ow, oh) = self.out;
-        self.half_rgb.resize(3 * ow * h, 0.0);
-        for (row, half) in rgb
-            .chunks_exact(3 * w)
-            .zip(self.half_rgb.chunks_exact_mut(3 * ow))
-        {
-            for (x, out) in half.chunks_exact_mut(3).enumerate() {
+        // Clipped as the appearance's window clips its rectangle (`WorkingWindow::read`), which
+        // reads pixels in [⌊x0⌋, ⌈x1⌉) of the clipped one.
+        let span = |lo: f64, hi: f64, n: usize| {
+            let lo = lo.clamp(0.0, n as f64 - 1.0).floor();
+            let hi = hi.clamp(lo + 1.0, n as f64).ceil();
+            (lo as usize).saturating_sub(1)..(hi as usize + 1).min(n)
+        };
+        let (xs, ys) = match region {
+            Some([x0, y0, x1, y1]) => (span(x0, x1, ow), span(y0, y1, oh)),
+            None => (0..ow, 0..oh),
+        };
+        self.rgb.clear();
+        self.rgb.resize(3 * ow * oh, 0);
+        if xs.is_empty() || ys.is_empty() {
+            return;
+        }
+        // The frame's rows the region's output rows average.
+        let first = self.rows.taps(ys.start).first().map_or(0, |t| t.0);
+        let last = self.rows.taps(ys.end - 1).last().map_or(0, |t| t.0);
+        self.half_rgb.resize(3 * ow * self.size.1, 0.0);
+        for y in first..=last {
+            let row = &rgb[3 * y * w..3 * (y + 1) * w];
+            let half = &mut self.half_rgb[3 * y * ow..3 * (y + 1) * ow];
+            for x in xs.clone() {
                 // -0.0, the neutral element `Iterator::sum` starts from.
                 let mut sums = [-0.0f32; 3];
                 for &(j, t) in self.columns.taps(x) {
@@ -253,20 +273,22 @@ impl Shrinker {
                         *sum += t * f32::from(pixel[offset]);
                     }
                 }
-                out.copy_from_slice(&sums);
+                half[3 * x..3 * x + 3].copy_from_slice(&sums);
             }
         }
-        self.rgb.resize(3 * ow * oh, 0);
+        let (x0, x1) = (3 * xs.start, 3 * xs.end);
         self.row_rgb.resize(3 * ow, 0.0);
-        for (y, out) in self.rgb.chunks_exact_mut(3 * ow).enumerate() {
-            self.row_rgb.fill(0.0);
+        for y in ys {
+            let acc = &mut self.row_rgb[x0..x1];
+            acc.fill(0.0);
             for &(j, t) in self.rows.taps(y) {
-                let src = &self.half_rgb[3 * j * ow..3 * (j + 1) * ow];
-                for (o, s) in self.row_rgb.iter_mut().zip(src) {
+                let src = &self.half_rgb[3 * j * ow + x0..3 * j * ow + x1];
+                for (o, s) in acc.iter_mut().zip(src) {
                     *o += t * s;
                 }
             }
-            for (o, &v) in out.iter_mut().zip(&self.row_rgb) {
+            let out = &mut self.rgb[3 * y * ow + x0..3 * y * ow + x1];
+            for (o, &v) in out.iter_mut().zip(acc.iter()) {
                 *o = round_level(v);
             }
         }
@@ -344,6 +366,7 @@ impl ScaledTracker {
     fn on_working_frame(
         &mut self,
         frame: Frame<'_>,
+        initialising: bool,
         step: impl FnOnce(&mut ParticleTracker, Frame<'_>) -> Result<Estimate>,
     ) -> Result<Estimate> {
         if self.scale.is_identity() {
@@ -357,7 +380,13 @@ impl ScaledTracker {
             .colour()
             .filter(|_| self.inner.config().appearance.is_some());
         if let Some((rgb, order)) = colour {
-            self.shrinker.shrink_colour(rgb, order);
+            // After the first frame the colour terms read their window only: the rest of the
+            // working frame's colour is left black.
+            let window = match initialising {
+                true => None,
+                false => self.inner.next_colour_window(),
+            };
+            self.shrinker.shrink_colour(rgb, order, window);
         }
         self.shrinker.shrink(frame.data());
         let pixels = &self.shrinker.pixels;
@@ -387,11 +416,11 @@ impl Tracker for ScaledTracker {
         self.scale = WorkingScale::for_radius(&ellipse, self.inner.config().working_radius);
         self.shrinker = Shrinker::for_frames(self.scale, frame.width(), frame.height());
         let working = self.scale.to_working(&ellipse);
-        self.on_working_frame(frame, |inner, f| inner.init(f, working))
+        self.on_working_frame(frame, true, |inner, f| inner.init(f, working))
     }
 
     fn update(&mut self, frame: Frame<'_>) -> Result<Estimate> {
-        self.on_working_frame(frame, |inner, f| inner.update(f))
+        self.on_working_frame(frame, false, |inner, f| inner.update(f))
     }
 
     fn smoothed(&mut self, settings: &SmootherSettings) -> Result<SmoothedRun> {
@@ -433,7 +462,7 @@ mod tests {
             let scale = WorkingScale::for_target(&target, 16.0);
             let mut shrinker = Shrinker::new(scale, w, h);
             let order = [2, 0, 1];
-            shrinker.shrink_colour(&rgb, order);
+            shrinker.shrink_colour(&rgb, order, None);
             let fused = shrinker.rgb.clone();
             let mut plane = Vec::new();
             for (c, &offset) in order.iter().enumerate() {
@@ -441,6 +470,45 @@ mod tests {
                 for (i, v) in plane.iter().enumerate() {
                     let level = v.round().clamp(0.0, 255.0) as u8;
                     assert_eq!(fused[3 * i + c], level, "factor {}", scale.factor());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_region_of_the_colour_is_shrunk_as_the_whole_frame_is() {
+        // Inside the region (widened by a pixel), the same levels to the bit as the whole
+        // frame's; black outside; regions that reach past the frame are clipped.
+        let (w, h) = (131, 89);
+        let rgb: Vec<u8> = (0..3 * w * h)
+            .map(|i| ((i * 2_654_435_761usize) >> 9) as u8)
+            .collect();
+        let scale = WorkingScale::for_target(&Ellipse::new(60.0, 40.0, 29.0, 29.0, 0.0), 16.0);
+        let mut shrinker = Shrinker::new(scale, w, h);
+        let (ow, oh) = shrinker.out;
+        shrinker.shrink_colour(&rgb, [0, 1, 2], None);
+        let whole = shrinker.rgb.clone();
+        for region in [
+            [10.3, 7.8, 30.1, 22.6],
+            [-5.0, -3.0, 12.0, 9.5],
+            [50.0, 30.0, 400.0, 300.0],
+            [0.0, 0.0, ow as f64, oh as f64],
+        ] {
+            shrinker.shrink_colour(&rgb, [0, 1, 2], Some(region));
+            let inside = |v: usize, lo: f64, hi: f64, n: usize| {
+                let lo = lo.clamp(0.0, n as f64 - 1.0).floor();
+                let hi = hi.clamp(lo + 1.0, n as f64).ceil();
+                v + 1 >= lo as usize && (v as f64) < hi + 1.0
+            };
+            for y in 0..oh {
+                for x in 0..ow {
+                    let k = 3 * (y * ow + x);
+                    let got = &shrinker.rgb[k..k + 3];
+                    if inside(x, region[0], region[2], ow) && inside(y, region[1], region[3], oh) {
+                        assert_eq!(got, &whole[k..k + 3], "{region:?} at {x},{y}");
+                    } else {
+                        assert_eq!(got, &[0, 0, 0], "{region:?} at {x},{y}");
+                    }
                 }
             }
         }
@@ -502,7 +570,7 @@ mod tests {
                 [x, y, 200 - x]
             })
             .collect();
-        shrinker.shrink_colour(&bgr, [2, 1, 0]);
+        shrinker.shrink_colour(&bgr, [2, 1, 0], None);
         for y in 0..oh {
             for x in 0..ow {
                 let (fx, fy) = (
