@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The Python package's CI: a fresh virtual environment, `pip install "./python[dask]" pytest
-# numpy` (which builds the Rust code through maturin with the workspace's test profile, and
+# numpy` (which builds the Rust code through maturin with the workspace's test settings, and
 # installs Dask for contour_track.cluster and its tests), then pytest with its summary.
 #
 # The determinism tests compare the binding's boxes with `track run`'s: they use $TRACK_BIN, or
@@ -29,13 +29,16 @@ if [ -z "${TRACK_BIN:-}" ] && ! has_track_bin; then
 fi
 export CONTOUR_TRACK_REQUIRE_TRACK_BIN=1
 start=$(date +%s)
-# The tests check behaviour, not speed: the extension is built with the workspace's test profile
-# (optimised, with debug assertions) into the workspace's target folder, where every crate the
-# workspace's tests compiled is reused (the Python package is a workspace member; python/Cargo.toml
-# lines up the features of the shared dependencies), so only pyo3, numpy and the extension are
-# compiled here. The numbers are the release build's (no fast-math anywhere; the determinism tests
-# compare its boxes with `track`'s). `pip install ./python` for users builds the release profile.
-export MATURIN_PEP517_ARGS="--profile test"
+# The tests check behaviour, not speed: the extension is built into the workspace's target folder
+# with the dev profile raised to the test profile's settings (optimised, with debug assertions;
+# `cargo rustc --profile test`, which maturin runs, would build a test harness instead), so
+# that every crate the workspace's tests compiled is reused (the Python package is a workspace
+# member; python/Cargo.toml lines up the features of the shared dependencies) and only pyo3,
+# numpy and the extension are compiled here. The numbers are the release build's (no fast-math
+# anywhere; the determinism tests compare its boxes with `track`'s). `pip install ./python` for
+# users builds the release profile.
+export MATURIN_PEP517_ARGS="--profile dev" CARGO_PROFILE_DEV_OPT_LEVEL=3 \
+    CARGO_PROFILE_DEV_DEBUG=line-tables-only
 "$venv/bin/python" -m pip install --quiet --upgrade pip
 "$venv/bin/python" -m pip install --quiet "$repo/python[dask]" pytest numpy
 echo "python/ci.sh: pip install took $(( $(date +%s) - start )) s"
