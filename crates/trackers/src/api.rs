@@ -40,7 +40,8 @@ pub struct Estimate {
     /// left empty by k-means (fewer distinct particles than K after resampling) are not counted:
     /// no particle uses them, so their motion is not estimated.
     pub motion_clusters: (usize, usize),
-    /// Wall time of the update, milliseconds.
+    /// Wall time of the update, milliseconds: everything the tracker does with the frame,
+    /// shrinking it to the working scale included.
     pub millis: f64,
 }
 

@@ -372,6 +372,8 @@ impl ScaledTracker {
         if self.scale.is_identity() {
             return step(&mut self.inner, frame);
         }
+        // The update's wall time includes the shrinking, part of the tracker's work.
+        let start = std::time::Instant::now();
         // Only updates can meet a frame of another size (init sets the size).
         frame.check_size(self.shrinker.size, self.inner.frames_done() + 1)?;
         let (ow, oh) = self.shrinker.out;
@@ -395,7 +397,8 @@ impl ScaledTracker {
             None => Frame::new(ow, oh, pixels)?,
         };
         self.inner.offer_source_frame(&frame, self.scale);
-        let estimate = step(&mut self.inner, working)?;
+        let mut estimate = step(&mut self.inner, working)?;
+        estimate.millis = start.elapsed().as_secs_f64() * 1e3;
         Ok(self
             .scale
             .estimate_to_frame(self.inner.config().space, estimate))
