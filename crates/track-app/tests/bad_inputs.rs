@@ -7,7 +7,7 @@ use crate::common;
 
 use std::path::{Path, PathBuf};
 
-use common::{DISC_INIT, disc_frames, one_error_line, s, stderr, stdout, track};
+use common::{DISC_INIT, disc_frames, one_error_line, paired, s, stderr, stdout, track};
 
 /// An OTB folder `dir/name` of `n` disc frames with a box on every line.
 fn otb_folder(dir: &Path, name: &str, n: usize) -> PathBuf {
@@ -48,18 +48,6 @@ fn results(dir: &Path, name: &str, auc: f64, frames: usize) -> PathBuf {
     );
     std::fs::write(out.join("ope/otb.csv"), csv).unwrap();
     out
-}
-
-fn paired(base: &[&Path], variant: &[&Path], extra: &[&str]) -> std::process::Output {
-    let mut args = vec!["eval", "paired"];
-    for b in base {
-        args.extend(["--base", s(b)]);
-    }
-    for v in variant {
-        args.extend(["--variant", s(v)]);
-    }
-    args.extend_from_slice(extra);
-    track(&args)
 }
 
 /// `track run INPUT [EXTRA…] --tracker m1 --particles 20 --out OUT --quiet`: a quick run.

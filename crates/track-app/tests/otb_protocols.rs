@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use crate::common;
 
-use common::{disc_frames, one_error_line, s, track};
+use common::{disc_frames, one_error_line, paired, s, track};
 
 /// The true box of the disc of [`common::disc_image`] on frame `k` of [`disc_frames`].
 fn disc_box(k: usize) -> [f64; 4] {
@@ -771,17 +771,6 @@ fn paired_compares_two_trackers_seed_by_seed_and_refuses_what_it_cannot_pair() {
     };
     let base: Vec<PathBuf> = ["1", "2", "3"].iter().map(|k| run("head", k)).collect();
     let variant: Vec<PathBuf> = ["1", "2", "3"].iter().map(|k| run("m1", k)).collect();
-    let paired = |base: &[PathBuf], variant: &[PathBuf], extra: &[&str]| {
-        let mut args = vec!["eval", "paired"];
-        for b in base {
-            args.extend(["--base", s(b)]);
-        }
-        for v in variant {
-            args.extend(["--variant", s(v)]);
-        }
-        args.extend(extra);
-        track(&args)
-    };
     let report = dir.path().join("paired.md");
     let o = paired(&base, &variant, &["--out", s(&report)]);
     assert!(o.status.success(), "{}", common::stderr(&o));

@@ -81,3 +81,17 @@ pub fn csv_header(out: &Path) -> String {
 pub fn summary(out: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
 }
+
+/// `track eval paired` of the `base` folders against the `variant` folders, with `extra`
+/// arguments.
+pub fn paired<P: AsRef<Path>>(base: &[P], variant: &[P], extra: &[&str]) -> Output {
+    let mut args = vec!["eval", "paired"];
+    for b in base {
+        args.extend(["--base", s(b.as_ref())]);
+    }
+    for v in variant {
+        args.extend(["--variant", s(v.as_ref())]);
+    }
+    args.extend_from_slice(extra);
+    track(&args)
+}

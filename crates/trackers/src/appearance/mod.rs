@@ -354,7 +354,7 @@ impl Appearance {
     /// area and the reference template.
     pub fn read(&mut self, frame: &Frame<'_>, estimate: &Ellipse) {
         let s = &self.settings;
-        let whole = self.next_window(estimate).is_none();
+        let whole = self.reads_whole_frame();
         read_window(s, &mut self.window, frame, &self.bins, estimate, whole);
         let mut target = self.initial_target.clone();
         target.blend(&self.target, s.learnt_share);
@@ -373,15 +373,19 @@ impl Appearance {
         );
     }
 
-    /// The part of the next frame the next [`Appearance::read`] around `estimate` reads,
-    /// `[x0, y0, x1, y1]` before clipping to the frame: the window around it, or `None` for the
-    /// whole frame (read while the target is believed lost, when
-    /// [`AppearanceSettings::whole_frame_while_lost`]). Its colour is all the terms read of a
-    /// frame after the first.
-    pub fn next_window(&self, estimate: &Ellipse) -> Option<[f64; 4]> {
-        let s = &self.settings;
-        let whole = s.whole_frame_while_lost && self.lock.p_lost() > 0.5;
-        (!whole).then(|| window_around(s, estimate))
+    /// Whether the next [`Appearance::read`] reads the whole frame (while the target is believed
+    /// lost, with [`AppearanceSettings::whole_frame_while_lost`]).
+    fn reads_whole_frame(&self) -> bool {
+        self.settings.whole_frame_while_lost && self.lock.p_lost() > 0.5
+    }
+
+    /// The pixels of a `width`×`height` frame that the next [`Appearance::read`] around
+    /// `estimate` reads, `[x0, y0, x1, y1]` (x1 and y1 excluded): its colour is all the terms
+    /// read of a frame after the first.
+    pub fn next_footprint(&self, width: usize, height: usize, estimate: &Ellipse) -> [usize; 4] {
+        let whole = self.reads_whole_frame();
+        let (rect, step) = window_rect(&self.settings, width, height, estimate, whole);
+        window::footprint(width, height, rect, step)
     }
 
     /// A buffer for [`Appearance::template_similarity`]'s samples.
@@ -520,12 +524,29 @@ impl Appearance {
     }
 }
 
-/// The window around `e`, `[x0, y0, x1, y1]`: `search` half-axes each way (before clipping to
-/// the frame).
-fn window_around(s: &AppearanceSettings, e: &Ellipse) -> [f64; 4] {
-    let (hw, hh) = e.half_extents();
-    let (hx, hy) = (s.search * hw, s.search * hh);
-    [e.cx - hx, e.cy - hy, e.cx + hx, e.cy + hy]
+/// The rectangle the window around `e` reads from a `width`×`height` frame (the whole frame when
+/// `whole`), `[x0, y0, x1, y1]` before clipping, and its step in frame pixels per window pixel.
+fn window_rect(
+    s: &AppearanceSettings,
+    width: usize,
+    height: usize,
+    e: &Ellipse,
+    whole: bool,
+) -> ([f64; 4], f64) {
+    let (fw, fh) = (width as f64, height as f64);
+    let rect = if whole {
+        [0.0, 0.0, fw, fh]
+    } else {
+        let (hw, hh) = e.half_extents();
+        let (hx, hy) = (s.search * hw, s.search * hh);
+        [e.cx - hx, e.cy - hy, e.cx + hx, e.cy + hy]
+    };
+    let area = (rect[2].min(fw) - rect[0].max(0.0)) * (rect[3].min(fh) - rect[1].max(0.0));
+    // One window pixel per pixel of the tracker's frame, which the working scale has already
+    // sized to the target ([`crate::working_scale`]); coarser only to keep a whole frame under
+    // the bound.
+    let step = (area.max(0.0) / s.max_window_pixels as f64).sqrt().max(1.0);
+    (rect, step)
 }
 
 /// Reads the window of `frame` around `e` (the whole frame when `whole`).
@@ -537,17 +558,7 @@ fn read_window(
     e: &Ellipse,
     whole: bool,
 ) {
-    let (fw, fh) = (frame.width() as f64, frame.height() as f64);
-    let rect = if whole {
-        [0.0, 0.0, fw, fh]
-    } else {
-        window_around(s, e)
-    };
-    let area = (rect[2].min(fw) - rect[0].max(0.0)) * (rect[3].min(fh) - rect[1].max(0.0));
-    // One window pixel per pixel of the tracker's frame, which the working scale has already
-    // sized to the target ([`crate::working_scale`]); coarser only to keep a whole frame under
-    // the bound.
-    let step = (area.max(0.0) / s.max_window_pixels as f64).sqrt().max(1.0);
+    let (rect, step) = window_rect(s, frame.width(), frame.height(), e, whole);
     window.read(frame, bins, rect, step);
 }
 

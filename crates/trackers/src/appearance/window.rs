@@ -23,6 +23,65 @@ const STRIPS: usize = 10;
 /// Points on the contour read by [`WorkingWindow::edge_strength`].
 const CONTOUR_POINTS: usize = 32;
 
+/// Where [`WorkingWindow::read`] samples a `width`×`height` frame for a rectangle and a step: the
+/// rectangle clipped to the frame, its size in window pixels and the samples' offsets in each.
+struct Layout {
+    origin: [f64; 2],
+    step: f64,
+    width: usize,
+    height: usize,
+    frame: (usize, usize),
+}
+
+impl Layout {
+    fn new(width: usize, height: usize, rect: [f64; 4], step: f64) -> Self {
+        let (fw, fh) = (width as f64, height as f64);
+        let x0 = rect[0].clamp(0.0, fw - 1.0).floor();
+        let y0 = rect[1].clamp(0.0, fh - 1.0).floor();
+        let x1 = rect[2].clamp(x0 + 1.0, fw);
+        let y1 = rect[3].clamp(y0 + 1.0, fh);
+        let step = step.max(1.0);
+        Self {
+            origin: [x0, y0],
+            step,
+            width: (((x1 - x0) / step).ceil() as usize).max(1),
+            height: (((y1 - y0) / step).ceil() as usize).max(1),
+            frame: (width, height),
+        }
+    }
+
+    /// Where in a window pixel its samples lie, in steps from its centre: a 2 × 2 grid when a
+    /// window pixel spans two frame pixels or more, the centre otherwise.
+    fn offsets(&self) -> &'static [f64] {
+        if self.step >= 2.0 {
+            &[-0.25, 0.25]
+        } else {
+            &[0.0]
+        }
+    }
+
+    /// The frame pixels the samples read, `[x0, y0, x1, y1]` (x1 and y1 excluded).
+    fn footprint(&self) -> [usize; 4] {
+        let offsets = self.offsets();
+        let (first, last) = (offsets[0], offsets[offsets.len() - 1]);
+        let span = |origin: f64, n: usize, len: usize| {
+            let at = |i: usize, d: f64| {
+                ((origin + (i as f64 + 0.5) * self.step + d * self.step) as usize).min(len - 1)
+            };
+            (at(0, first), at(n - 1, last) + 1)
+        };
+        let (x0, x1) = span(self.origin[0], self.width, self.frame.0);
+        let (y0, y1) = span(self.origin[1], self.height, self.frame.1);
+        [x0, y0, x1, y1]
+    }
+}
+
+/// The pixels of a `width`×`height` frame that [`WorkingWindow::read`] of `rect` at `step`
+/// reads, `[x0, y0, x1, y1]` (x1 and y1 excluded).
+pub fn footprint(width: usize, height: usize, rect: [f64; 4], step: f64) -> [usize; 4] {
+    Layout::new(width, height, rect, step).footprint()
+}
+
 /// A window of a frame at the working scale. Reused from frame to frame (no allocation once
 /// the buffers have grown).
 #[derive(Debug, Clone, Default)]
@@ -48,22 +107,19 @@ impl WorkingWindow {
     /// frame) at `step` full-resolution pixels per working pixel. Each working pixel averages
     /// a 2 × 2 grid of samples in its footprint when `step` ≥ 2, one sample otherwise.
     pub fn read(&mut self, frame: &Frame<'_>, bins: &ColourBins, rect: [f64; 4], step: f64) {
-        let (fw, fh) = (frame.width() as f64, frame.height() as f64);
-        let x0 = rect[0].clamp(0.0, fw - 1.0).floor();
-        let y0 = rect[1].clamp(0.0, fh - 1.0).floor();
-        let x1 = rect[2].clamp(x0 + 1.0, fw);
-        let y1 = rect[3].clamp(y0 + 1.0, fh);
-        let step = step.max(1.0);
-        self.origin = [x0, y0];
+        let layout = Layout::new(frame.width(), frame.height(), rect, step);
+        let [x0, y0] = layout.origin;
+        let step = layout.step;
+        self.origin = layout.origin;
         self.step = step;
-        self.width = (((x1 - x0) / step).ceil() as usize).max(1);
-        self.height = (((y1 - y0) / step).ceil() as usize).max(1);
+        self.width = layout.width;
+        self.height = layout.height;
         let n = self.width * self.height;
         self.bins.clear();
         self.grey.clear();
         self.bins.reserve(n);
         self.grey.reserve(n);
-        let offsets: &[f64] = if step >= 2.0 { &[-0.25, 0.25] } else { &[0.0] };
+        let offsets = layout.offsets();
         let inv = 1.0 / (offsets.len() * offsets.len()) as f32;
         let (w, h) = (frame.width(), frame.height());
         let grey = frame.data();
@@ -359,6 +415,39 @@ impl WorkingWindow {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_read_sees_nothing_outside_its_footprint() {
+        // Whatever the frame holds outside the footprint, a read gives the same grey levels and
+        // bins: at one sample a window pixel and at four, inside the frame and cut by its edges.
+        let (w, h) = (97, 71);
+        let texture = |k: usize| ((k * 2_654_435_761) >> 11) as u8;
+        let rgb: Vec<u8> = (0..3 * w * h).map(texture).collect();
+        let bins = ColourBins::colour(8, 8, &crate::HistogramSettings::default());
+        for (rect, step) in [
+            ([20.3, 11.7, 61.2, 50.4], 1.0),
+            ([20.3, 11.7, 61.2, 50.4], 2.6),
+            ([-9.0, -4.0, 30.0, 25.0], 3.4),
+            ([70.5, 40.2, 130.0, 90.0], 1.7),
+        ] {
+            let [x0, y0, x1, y1] = footprint(w, h, rect, step);
+            assert!(x0 < x1 && x1 <= w && y0 < y1 && y1 <= h, "{rect:?}");
+            let mut masked = rgb.clone();
+            for (k, px) in masked.chunks_exact_mut(3).enumerate() {
+                if !((x0..x1).contains(&(k % w)) && (y0..y1).contains(&(k / w))) {
+                    px.copy_from_slice(&[255, 0, 255]);
+                }
+            }
+            let read = |rgb: &[u8]| {
+                let grey: Vec<f32> = rgb.chunks(3).map(|p| f32::from(p[1])).collect();
+                let frame = Frame::with_rgb(w, h, &grey, rgb).unwrap();
+                let mut window = WorkingWindow::default();
+                window.read(&frame, &bins, rect, step);
+                (window.grey, window.bins)
+            };
+            assert_eq!(read(&rgb), read(&masked), "{rect:?} at step {step}");
+        }
+    }
 
     #[test]
     fn a_tall_pose_is_read_standing_up() {

@@ -238,14 +238,14 @@ impl ParticleTracker {
         self.likelihood.push(term);
     }
 
-    /// The part of the next frame whose colour the next update reads, `[x0, y0, x1, y1]` in
-    /// pixels before clipping ([`Appearance::next_window`] around the last estimate); `None`
-    /// when it may read anywhere (no appearance model, not started, or the whole frame).
-    pub(crate) fn next_colour_window(&self) -> Option<[f64; 4]> {
+    /// The pixels of the next frame whose colour the next update reads, `[x0, y0, x1, y1]` (x1
+    /// and y1 excluded; [`Appearance::next_footprint`] around the last estimate); `None` when
+    /// that is not known (no appearance model, or not started).
+    pub(crate) fn next_colour_footprint(&self) -> Option<[usize; 4]> {
         let appearance = self.appearance.as_ref()?;
         self.set.as_ref()?;
         let last = self.config.space.pose(&self.last_state).to_ellipse()?;
-        appearance.next_window(&last)
+        Some(appearance.next_footprint(self.size.0, self.size.1, &last))
     }
 
     /// The frame that the next frame given to this tracker was shrunk from, and the scale

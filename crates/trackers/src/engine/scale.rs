@@ -234,24 +234,15 @@ impl Shrinker {
     /// Shrinks the colour of a frame (`order`: where R, G and B sit in each pixel) into
     /// interleaved RGB (`rgb`), each channel averaged as the grey levels are
     /// ([`Shrinker::shrink_into`]) and rounded to the nearest level; only the working pixels of
-    /// `region` (`[x0, y0, x1, y1]` in working pixels, widened by one pixel each way and clipped;
-    /// `None`: all), the others black. The three channels go through each pass together,
-    /// reading the frame once; every channel's sums are taken in the same order as one
-    /// channel's alone, so the levels are the same to the bit, whatever the region.
-    fn shrink_colour(&mut self, rgb: &[u8], order: [usize; 3], region: Option<[f64; 4]>) {
+    /// `region` (`[x0, y0, x1, y1]`, x1 and y1 excluded, clipped to the working frame; `None`:
+    /// all), the others black. The three channels go through each pass together, reading the
+    /// frame once; every channel's sums are taken in the same order as one channel's alone, so
+    /// the levels are the same to the bit, whatever the region.
+    fn shrink_colour(&mut self, rgb: &[u8], order: [usize; 3], region: Option<[usize; 4]>) {
         let (w, _) = self.size;
         let (ow, oh) = self.out;
-        // Clipped as the appearance's window clips its rectangle (`WorkingWindow::read`), which
-        // reads pixels in [⌊x0⌋, ⌈x1⌉) of the clipped one.
-        let span = |lo: f64, hi: f64, n: usize| {
-            let lo = lo.clamp(0.0, n as f64 - 1.0).floor();
-            let hi = hi.clamp(lo + 1.0, n as f64).ceil();
-            (lo as usize).saturating_sub(1)..(hi as usize + 1).min(n)
-        };
-        let (xs, ys) = match region {
-            Some([x0, y0, x1, y1]) => (span(x0, x1, ow), span(y0, y1, oh)),
-            None => (0..ow, 0..oh),
-        };
+        let [x0, y0, x1, y1] = region.unwrap_or([0, 0, ow, oh]);
+        let (xs, ys) = (x0.min(ow)..x1.min(ow), y0.min(oh)..y1.min(oh));
         self.rgb.clear();
         self.rgb.resize(3 * ow * oh, 0);
         if xs.is_empty() || ys.is_empty() {
@@ -384,11 +375,11 @@ impl ScaledTracker {
         if let Some((rgb, order)) = colour {
             // After the first frame the colour terms read their window only: the rest of the
             // working frame's colour is left black.
-            let window = match initialising {
+            let footprint = match initialising {
                 true => None,
-                false => self.inner.next_colour_window(),
+                false => self.inner.next_colour_footprint(),
             };
-            self.shrinker.shrink_colour(rgb, order, window);
+            self.shrinker.shrink_colour(rgb, order, footprint);
         }
         self.shrinker.shrink(frame.data());
         let pixels = &self.shrinker.pixels;
@@ -480,8 +471,8 @@ mod tests {
 
     #[test]
     fn a_region_of_the_colour_is_shrunk_as_the_whole_frame_is() {
-        // Inside the region (widened by a pixel), the same levels to the bit as the whole
-        // frame's; black outside; regions that reach past the frame are clipped.
+        // Inside the region, the same levels to the bit as the whole frame's; black outside;
+        // a region that reaches past the frame is clipped.
         let (w, h) = (131, 89);
         let rgb: Vec<u8> = (0..3 * w * h)
             .map(|i| ((i * 2_654_435_761usize) >> 9) as u8)
@@ -492,26 +483,24 @@ mod tests {
         shrinker.shrink_colour(&rgb, [0, 1, 2], None);
         let whole = shrinker.rgb.clone();
         for region in [
-            [10.3, 7.8, 30.1, 22.6],
-            [-5.0, -3.0, 12.0, 9.5],
-            [50.0, 30.0, 400.0, 300.0],
-            [0.0, 0.0, ow as f64, oh as f64],
+            [10, 7, 31, 23],
+            [0, 0, 12, 10],
+            [50, 30, 400, 300],
+            [0, 0, ow, oh],
         ] {
             shrinker.shrink_colour(&rgb, [0, 1, 2], Some(region));
-            let inside = |v: usize, lo: f64, hi: f64, n: usize| {
-                let lo = lo.clamp(0.0, n as f64 - 1.0).floor();
-                let hi = hi.clamp(lo + 1.0, n as f64).ceil();
-                v + 1 >= lo as usize && (v as f64) < hi + 1.0
-            };
             for y in 0..oh {
                 for x in 0..ow {
                     let k = 3 * (y * ow + x);
                     let got = &shrinker.rgb[k..k + 3];
-                    if inside(x, region[0], region[2], ow) && inside(y, region[1], region[3], oh) {
-                        assert_eq!(got, &whole[k..k + 3], "{region:?} at {x},{y}");
+                    let inside =
+                        (region[0]..region[2]).contains(&x) && (region[1]..region[3]).contains(&y);
+                    let expected = if inside {
+                        &whole[k..k + 3]
                     } else {
-                        assert_eq!(got, &[0, 0, 0], "{region:?} at {x},{y}");
-                    }
+                        &[0, 0, 0][..]
+                    };
+                    assert_eq!(got, expected, "{region:?} at {x},{y}");
                 }
             }
         }
