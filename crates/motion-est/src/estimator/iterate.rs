@@ -155,7 +155,7 @@ impl MotionEstimator {
                 let mut t = *theta;
                 t[tx] += f64::from(dx);
                 t[ty] += f64::from(dy);
-                if ws.evaluate(lv.l0, lv.l1, spec, &t, lv.o, lv.full_res) < n + 1 {
+                if ws.residuals_at_shift(lv.l0, lv.l1, spec, &t, lv.o, lv.full_res) < n + 1 {
                     continue;
                 }
                 let q = lower_quartile(&ws.res, &ws.valid, &mut ws.scratch);

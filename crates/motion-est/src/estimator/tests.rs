@@ -359,3 +359,76 @@ fn pixels_leaving_the_image_are_dropped() {
     assert!((1.0 - 8.0 / 124.0..=1.0).contains(&f), "{f}");
     assert!(r.reliable);
 }
+
+#[test]
+fn whole_pixel_translations_give_evaluate_s_residuals_bit_for_bit() {
+    // The cold start's search reads residuals at whole-pixel shifts without interpolating: they
+    // must be `evaluate`'s to the bit, with the same validity, at full resolution (bicubic
+    // interior, bilinear border) and at a coarse level (bilinear), for shifts that carry the
+    // region across the frame's border (clamped last row and column included); any other Θ is
+    // evaluated in full.
+    let origin = SHARED_ORIGIN;
+    let (f0, f1) = pair(SHARED_MOTION, origin, 3.0);
+    let (v0, v1) = views(&f0, &f1);
+    let est = MotionEstimator::new(Settings::default()).unwrap();
+    let (mut p0, mut p1) = (Pyramid::new(), Pyramid::new());
+    est.build_pyramid_into(v0, &mut p0).unwrap();
+    est.build_pyramid_into(v1, &mut p1).unwrap();
+    let region = Region::Ellipse(Ellipse {
+        cx: 64.0,
+        cy: 48.0,
+        a: 60.0,
+        b: 44.0,
+        angle: 0.0,
+    });
+    let bbox = region.pixel_box(W, H).unwrap();
+    for (level, full_res) in [(0, true), (1, false)] {
+        let (l0, l1) = (p0.level(level).unwrap(), p1.level(level).unwrap());
+        let f = 0.5f64.powi(level as i32);
+        let o = [origin[0] * f, origin[1] * f];
+        for spec in [
+            ModelSpec::new(MotionModel::Translation, false),
+            ModelSpec::new(MotionModel::Affine, true),
+        ] {
+            let (tx, ty) = (0, spec.model.geometric_len() / 2);
+            let mut thetas = Vec::new();
+            for (dx, dy) in [
+                (0.0, 0.0),
+                (2.0, -1.0),
+                (-5.0, 3.0),
+                (7.0, 6.0),
+                (-9.0, -8.0),
+            ] {
+                let mut t = [0.0f64; 7];
+                (t[tx], t[ty]) = (dx, dy);
+                thetas.push(t);
+            }
+            // Not whole pixels, or not a translation: the full evaluation.
+            let mut frac = [0.0f64; 7];
+            frac[tx] = 0.5;
+            thetas.push(frac);
+            if spec.model == MotionModel::Affine {
+                let mut lin = [0.0f64; 7];
+                lin[1] = 0.01;
+                thetas.push(lin);
+            }
+            for theta in thetas {
+                let mut a = Workspace::new();
+                a.collect(l0, level, &region, bbox);
+                let mut b = a.clone();
+                let na = a.evaluate(l0, l1, spec, &theta, o, full_res);
+                let nb = b.residuals_at_shift(l0, l1, spec, &theta, o, full_res);
+                assert_eq!(na, nb, "level {level}, {spec:?}, {theta:?}");
+                assert!(na > 0);
+                assert_eq!(a.valid, b.valid, "level {level}, {spec:?}, {theta:?}");
+                for k in (0..a.idx.len()).filter(|&k| a.valid[k] != 0) {
+                    assert_eq!(
+                        a.res[k].to_bits(),
+                        b.res[k].to_bits(),
+                        "level {level}, {spec:?}, {theta:?}, pixel {k}"
+                    );
+                }
+            }
+        }
+    }
+}

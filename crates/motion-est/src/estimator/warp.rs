@@ -96,6 +96,64 @@ impl Workspace {
         }
     }
 
+    /// The residuals and validity of the listed pixels under a whole-pixel translation Θ (its
+    /// linear part zero, its translation whole level pixels), exactly as
+    /// [`evaluate`](Self::evaluate) computes them, without the gradients; any other Θ is
+    /// evaluated in full. The second frame is then read at its own pixels, where both
+    /// interpolations return the pixel itself (Keys' weights are (0, 1, 0, 0) at fraction 0), so
+    /// an interior sample is one read. What a cold start's search of translations ranks by.
+    pub(super) fn residuals_at_shift(
+        &mut self,
+        l0: &Level,
+        l1: &Level,
+        spec: ModelSpec,
+        theta: &[f64; 7],
+        o: [f64; 2],
+        full_res: bool,
+    ) -> usize {
+        let a = affine_coefficients(spec.model, theta);
+        let whole = |v: f64| v.fract() == 0.0 && v.abs() < 1e9;
+        if a[1] != 0.0 || a[2] != 0.0 || a[4] != 0.0 || a[5] != 0.0 || !whole(a[0]) || !whole(a[3])
+        {
+            return self.evaluate(l0, l1, spec, theta, o, full_res);
+        }
+        let n = self.idx.len();
+        self.res.resize(n, 0.0);
+        self.valid.resize(n, 0);
+        let Some(warp) = Warp::new(l0, l1, spec, theta, o, full_res) else {
+            self.valid.fill(0);
+            return 0;
+        };
+        let (d1, w1, h1) = (&l1.data[..], l1.width, l1.height);
+        let mut n_valid = 0;
+        for sp in &self.spans {
+            let first = self.idx[sp.k0] as usize;
+            let z0 = &l0.data[first..first + sp.len];
+            let r = sp.k0..sp.k0 + sp.len;
+            let iter = self.res[r.clone()]
+                .iter_mut()
+                .zip(&mut self.valid[r])
+                .zip(z0);
+            for (t, ((res, valid), &z0)) in iter.enumerate() {
+                let Some(q) = warp.sample(sp, sp.i0 + t) else {
+                    *valid = 0;
+                    continue;
+                };
+                let v = if full_res && q.ix >= 1 && q.iy >= 1 && q.ix + 2 < w1 && q.iy + 2 < h1 {
+                    // Unclamped, so at fraction 0: the bicubic sample is the pixel.
+                    *valid = 2;
+                    d1[q.i00]
+                } else {
+                    *valid = 1;
+                    bilinear(d1, q.i00, w1, q.fx, q.fy)
+                };
+                *res = v - z0 - warp.offset;
+                n_valid += 1;
+            }
+        }
+        n_valid
+    }
+
     /// Residuals, gradients and validity of the listed pixels under Θ (level units, origin `o`).
     /// At full resolution (`full_res`) the second frame is sampled bicubically and the Jacobian uses
     /// the first frame's gradient mapped through (I + D)^−T; at coarse levels it is sampled
@@ -110,8 +168,6 @@ impl Workspace {
         full_res: bool,
     ) -> usize {
         let n = self.idx.len();
-        let ng = spec.model.geometric_len();
-        let c = if spec.offset { theta[ng] } else { 0.0 } as f32;
         self.res.resize(n, 0.0);
         self.gx.resize(n, 0.0);
         self.gy.resize(n, 0.0);
@@ -119,38 +175,11 @@ impl Workspace {
         self.fy.resize(n, 0.0);
         self.qi.resize(n, 0);
         self.valid.resize(n, 0);
-        let a = affine_coefficients(spec.model, theta);
-        // q = r + d(r) in the second frame's window: q = c + B·r.
-        let (bx1, bx2, by1, by2) = (1.0 + a[1], a[2], a[4], 1.0 + a[5]);
-        let cx = a[0] - a[1] * o[0] - a[2] * o[1] - l1.x0 as f64;
-        let cy = a[3] - a[4] * o[0] - a[5] * o[1] - l1.y0 as f64;
-        // (I + D)^−T = [[by2, −by1], [−bx2, bx1]] / det maps ∇z₀ to ∇z₁.
-        let det = bx1 * by2 - bx2 * by1;
-        let (t11, t12, t21, t22) = if det.abs() > 1e-6 {
-            (
-                (by2 / det) as f32,
-                (-by1 / det) as f32,
-                (-bx2 / det) as f32,
-                (bx1 / det) as f32,
-            )
-        } else {
-            (1.0, 0.0, 0.0, 1.0)
-        };
-        let (w1, h1) = (l1.width, l1.height);
-        if w1 < 2 || h1 < 2 {
+        let Some(ctx) = Warp::new(l0, l1, spec, theta, o, full_res) else {
             self.valid.fill(0);
             return 0;
-        }
-        let par = self.parallel();
-        let ctx = Warp {
-            c: [cx, cy],
-            b: [bx1, bx2, by1, by2],
-            t: [t11, t12, t21, t22],
-            offset: c,
-            l0,
-            l1,
-            full_res,
         };
+        let par = self.parallel();
         let out = Samples {
             res: &mut self.res,
             gx: &mut self.gx,
@@ -240,6 +269,48 @@ struct Warp<'l> {
     l0: &'l Level,
     l1: &'l Level,
     full_res: bool,
+}
+
+impl<'l> Warp<'l> {
+    /// The warp of Θ (level units, origin `o`) from the first frame's level `l0` into the
+    /// second's `l1`; `None` when `l1` is too small to sample.
+    fn new(
+        l0: &'l Level,
+        l1: &'l Level,
+        spec: ModelSpec,
+        theta: &[f64; 7],
+        o: [f64; 2],
+        full_res: bool,
+    ) -> Option<Self> {
+        let ng = spec.model.geometric_len();
+        let offset = if spec.offset { theta[ng] } else { 0.0 } as f32;
+        let a = affine_coefficients(spec.model, theta);
+        // q = r + d(r) in the second frame's window: q = c + B·r.
+        let (bx1, bx2, by1, by2) = (1.0 + a[1], a[2], a[4], 1.0 + a[5]);
+        let cx = a[0] - a[1] * o[0] - a[2] * o[1] - l1.x0 as f64;
+        let cy = a[3] - a[4] * o[0] - a[5] * o[1] - l1.y0 as f64;
+        // (I + D)^−T = [[by2, −by1], [−bx2, bx1]] / det maps ∇z₀ to ∇z₁.
+        let det = bx1 * by2 - bx2 * by1;
+        let (t11, t12, t21, t22) = if det.abs() > 1e-6 {
+            (
+                (by2 / det) as f32,
+                (-by1 / det) as f32,
+                (-bx2 / det) as f32,
+                (bx1 / det) as f32,
+            )
+        } else {
+            (1.0, 0.0, 0.0, 1.0)
+        };
+        (l1.width >= 2 && l1.height >= 2).then_some(Self {
+            c: [cx, cy],
+            b: [bx1, bx2, by1, by2],
+            t: [t11, t12, t21, t22],
+            offset,
+            l0,
+            l1,
+            full_res,
+        })
+    }
 }
 
 impl Warp<'_> {
