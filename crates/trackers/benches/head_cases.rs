@@ -79,18 +79,8 @@ fn case_frames(case: &Case) -> Option<(Vec<Vec<u8>>, Ellipse)> {
             (f64::from(img.height()) * s).round() as u32,
         );
         let scaled = image::imageops::resize(&img, sw, sh, image::imageops::FilterType::Triangle);
-        // The window's offset in the scaled frame: centred on the box, inside the frame when
-        // it fits, the frame centred in the window when it does not.
-        let offset = |c: f64, want: usize, have: u32| -> i64 {
-            let (want, have) = (want as f64, f64::from(have));
-            if have >= want {
-                (c - want / 2.0).clamp(0.0, have - want).round() as i64
-            } else {
-                -((want - have) / 2.0).round() as i64
-            }
-        };
         if k == 1 {
-            origin = (offset(cx, w, sw), offset(cy, h, sh));
+            origin = (window_offset(cx, w, sw), window_offset(cy, h, sh));
         }
         let (ox, oy) = origin;
         let mut rgb = Vec::with_capacity(w * h * 3);
@@ -111,6 +101,17 @@ fn case_frames(case: &Case) -> Option<(Vec<Vec<u8>>, Ellipse)> {
         angle: 0.0,
     };
     Some((frames, head))
+}
+
+/// The offset, along one axis, of a window of `want` pixels in a scaled frame of `have`: centred
+/// on `c`, inside the frame when it fits; the frame centred in the window when it does not.
+fn window_offset(c: f64, want: usize, have: u32) -> i64 {
+    let (want, have) = (want as f64, f64::from(have));
+    if have >= want {
+        (c - want / 2.0).clamp(0.0, have - want).round() as i64
+    } else {
+        -((want - have) / 2.0).round() as i64
+    }
 }
 
 /// `rgb` (`w`×`h`) rolled left by half its width.

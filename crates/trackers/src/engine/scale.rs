@@ -443,14 +443,19 @@ mod tests {
     use super::*;
     use crate::config::Preset;
 
+    /// Interleaved RGB of a `w`×`h` frame of hashed levels (`shift` picks the hash's bits).
+    fn texture_rgb(w: usize, h: usize, shift: u32) -> Vec<u8> {
+        (0..3 * w * h)
+            .map(|i| ((i * 2_654_435_761usize) >> shift) as u8)
+            .collect()
+    }
+
     #[test]
     fn colour_shrinks_to_the_levels_of_each_channel_shrunk_alone() {
         // The three channels averaged together give, to the bit, what each gives through
         // `shrink_into` alone, rounded: on a textured frame, at whole and fractional factors.
         let (w, h) = (97, 61);
-        let rgb: Vec<u8> = (0..3 * w * h)
-            .map(|i| ((i * 2_654_435_761usize) >> 7) as u8)
-            .collect();
+        let rgb = texture_rgb(w, h, 7);
         for radius in [24.0, 33.7, 50.0, 61.3] {
             let target = Ellipse::new(48.0, 30.0, radius, radius, 0.0);
             let scale = WorkingScale::for_target(&target, 16.0);
@@ -474,9 +479,7 @@ mod tests {
         // Inside the region, the same levels to the bit as the whole frame's; black outside;
         // a region that reaches past the frame is clipped.
         let (w, h) = (131, 89);
-        let rgb: Vec<u8> = (0..3 * w * h)
-            .map(|i| ((i * 2_654_435_761usize) >> 9) as u8)
-            .collect();
+        let rgb = texture_rgb(w, h, 9);
         let scale = WorkingScale::for_target(&Ellipse::new(60.0, 40.0, 29.0, 29.0, 0.0), 16.0);
         let mut shrinker = Shrinker::new(scale, w, h);
         let (ow, oh) = shrinker.out;
