@@ -78,10 +78,10 @@ pub use appearance::{AppearanceSettings, HistogramSettings};
 pub use build::{build, build_preset, build_with_terms};
 pub use config::{
     AXIS_ANGLE_TOLERANCE, CLUTTER_LINE_FRACTION, CONTOUR_SHAPE_TOLERANCE, ClutterMode,
-    ConfigFormat, DEFAULT_PARTICLES, DEFAULT_SEED, FIXED_LAMBDA, HEAD_WORKING_RADIUS,
-    MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MOTION_WORKING_RADIUS, MotionSettings, OCCLUSION_ARC,
-    OcclusionMode, PoseEstimator, Preset, ProposalKind, SHAPE_VELOCITY_RETENTION, TrackerConfig,
-    UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA, ranges,
+    ConfigFormat, DEFAULT_PARTICLES, DEFAULT_SEED, FIXED_LAMBDA, HEAD_DETECTION_SHARE,
+    HEAD_WORKING_RADIUS, MAX_CLUSTER_ITERATIONS, MAX_PARTICLES, MOTION_WORKING_RADIUS,
+    MotionSettings, OCCLUSION_ARC, OcclusionMode, PoseEstimator, Preset, ProposalKind,
+    SHAPE_VELOCITY_RETENTION, TrackerConfig, UNKNOWN_OCCLUDER_SHARE, W_OCC_SIGMA_GAMMA, ranges,
 };
 pub use dynamics::reacquisition::ReacquisitionSettings;
 pub use dynamics::{DynamicsSettings, NoiseKind};

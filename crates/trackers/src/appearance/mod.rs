@@ -477,6 +477,25 @@ impl Appearance {
         (x1 - x0) * (y1 - y0)
     }
 
+    /// Whether the lock chain would read `e` as the target rather than background
+    /// ([`LockChain::reads_as_locked`] of its colour similarity to the first frame's target):
+    /// the abrupt-motion jump draws only at a detection that does, so that where the target has
+    /// vanished the best patch of background in the window takes no particles.
+    pub fn looks_like_target(&self, e: &Ellipse) -> bool {
+        let (inside, _) = counts(&self.settings, &self.window, self.bins.len(), e);
+        self.lock
+            .reads_as_locked(self.lock_observation(inside.as_ref()))
+    }
+
+    /// The lock chain's observation q = (ρ − ρ_bg) / (1 − ρ_bg) of a histogram read inside an
+    /// ellipse (0 for none): ρ its Bhattacharyya coefficient with the first frame's target, ρ_bg
+    /// the first frame's background's.
+    fn lock_observation(&self, inside: Option<&Histogram>) -> f64 {
+        let rho = inside.map_or(0.0, |h| h.bhattacharyya(&self.initial_target));
+        let bg = self.background_similarity;
+        (rho - bg) / (1.0 - bg)
+    }
+
     /// After the estimate `e` of this frame: the lock chain reads its colour similarity to the
     /// first frame's target, and while the target is held the models learn from it.
     ///
@@ -485,11 +504,7 @@ impl Appearance {
     pub fn observe(&mut self, e: &Ellipse) -> Result<()> {
         let s = &self.settings;
         let (inside, ring) = counts(s, &self.window, self.bins.len(), e);
-        let rho = inside
-            .as_ref()
-            .map_or(0.0, |h| h.bhattacharyya(&self.initial_target));
-        let bg = self.background_similarity;
-        self.lock.observe((rho - bg) / (1.0 - bg));
+        self.lock.observe(self.lock_observation(inside.as_ref()));
         let hold = if s.lock_holds_learning {
             let p_lost = self.lock.p_lost();
             if p_lost >= 0.5 {

@@ -284,9 +284,13 @@ impl Preset {
                 // The lock chain alone says whether the target is held: a face that grows as it
                 // nears the camera is not lost. The jump is drawn around the appearance's
                 // detection, not around an extrapolation whose error grows with the gap, so its
-                // spread does not grow (docs/DECISIONS.md).
+                // spread does not grow (docs/DECISIONS.md). Abrupt motion: while the track is
+                // still locked, a tenth of the prior moves its centre to the detection, so a head
+                // that moves beyond the prior's reach in one frame is caught before the lock
+                // chain says lost ([`HEAD_DETECTION_SHARE`]).
                 reacquisition: Some(ReacquisitionSettings {
                     spread_growth: 0.0,
+                    detection_share: HEAD_DETECTION_SHARE,
                     ..ReacquisitionSettings::default()
                 }),
                 ..base
@@ -308,6 +312,13 @@ impl std::str::FromStr for Preset {
         Self::from_name(s)
     }
 }
+
+/// `head`'s share of the prior whose centre jumps to the appearance's detection while the track
+/// is locked ([`ReacquisitionSettings::detection_share`], η_d): one particle in ten, enough to
+/// carry the filter to a head that moved beyond the AR2 prior's reach in one frame (the stress
+/// suite's `shake`), few enough that the continuation holds a target the detection mistakes for
+/// a patch of background. The share hardly matters between 0.05 and 0.2 (docs/DECISIONS.md).
+pub const HEAD_DETECTION_SHARE: f64 = 0.1;
 
 /// The fixed clutter density λ, edges per pixel, of `w-fixed`, and of every configuration that
 /// names no `clutter` ([`ClutterMode::default`]; read by Wu's likelihood only).

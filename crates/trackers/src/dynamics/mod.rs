@@ -77,15 +77,28 @@ impl TrackerDynamics {
         eta > 0.0 && rng.random::<f64>() < eta
     }
 
-    /// A jump of `previous`: the kinematic pair from the reacquisition component, the clutter
-    /// from its transition and the status from the transition of a locked target (a target
-    /// that reappears is seen whole, whatever the ancestor believed).
-    pub fn sample_jump<R: Rng + ?Sized>(&self, previous: &Particle, rng: &mut R) -> Particle {
+    /// A jump of `previous`: the kinematic pair from the reacquisition component (for a jump
+    /// that moves the centre only, the state `continuation` draws, as the proposal would draw a
+    /// continuation, with its centre moved), the clutter from its transition and the status from
+    /// the transition of a locked target (a target that reappears is seen whole, whatever the
+    /// ancestor believed).
+    pub fn sample_jump<R: Rng + ?Sized>(
+        &self,
+        previous: &Particle,
+        rng: &mut R,
+        continuation: impl FnOnce(&mut R) -> StateVector,
+    ) -> Particle {
         let mut next = *previous;
         if let Some(r) = &self.reacquisition {
-            let (now, prev) = r.sample(self.space, rng);
-            next.now = now;
-            next.prev = prev;
+            if r.moves_centre_only() {
+                next.now = continuation(rng);
+                next.prev = previous.now;
+                r.sample_centre(self.space, &mut next.now, &mut next.prev, rng);
+            } else {
+                let (now, prev) = r.sample(self.space, rng);
+                next.now = now;
+                next.prev = prev;
+            }
             self.space.clamp(&mut next.now, &self.bounds);
         }
         let locked = Particle {
@@ -106,23 +119,25 @@ impl TrackerDynamics {
     }
 
     /// The density of `next` under the mixture of the jump (share η, its `density`) and the
-    /// continuation whose log-density `log_continue` computes (see
-    /// [`crate::dynamics::reacquisition::log_mixture_density`]).
+    /// continuation whose log-density `log_continue(keep)` computes over the components `keep`
+    /// accepts (see [`crate::dynamics::reacquisition::log_mixture_density`]).
     pub fn log_with_jump(
         &self,
         previous: &Particle,
         next: &Particle,
         density: JumpDensity,
-        log_continue: impl FnOnce() -> f64,
+        log_continue: impl Fn(&dyn Fn(usize) -> bool) -> f64,
     ) -> f64 {
+        let space = self.space;
         log_mixture_density(
             self.reacquisition.as_ref(),
-            self.space,
+            space,
             self.jump_share(),
             Reacquisition::is_jump(&previous.now, &next.prev),
             &next.now,
             density,
-            log_continue,
+            || log_continue(&|_| true),
+            || log_continue(&|j| !space.is_translation(j)),
         )
     }
 
@@ -138,8 +153,8 @@ impl TrackerDynamics {
     /// The density the prior draws `next` from: [`smc_core::Dynamics::log_density`] with the
     /// jump's proposal in place of its prior.
     pub fn log_sampling_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        self.log_with_jump(previous, next, JumpDensity::Sampling, || {
-            self.log_kinematic_density(previous, next)
+        self.log_with_jump(previous, next, JumpDensity::Sampling, |keep| {
+            self.log_kinematic_density_over(previous, next, keep)
         })
     }
 
@@ -308,8 +323,20 @@ impl TrackerDynamics {
 
     /// log p(x_k | x_{k−1}, x_{k−2}) of the kinematic part (Odobez Eq. 17 for Cauchy noise).
     pub fn log_kinematic_density(&self, previous: &Particle, next: &Particle) -> f64 {
+        self.log_kinematic_density_over(previous, next, &|_| true)
+    }
+
+    /// [`TrackerDynamics::log_kinematic_density`] over the components `keep` accepts: the
+    /// marginal, the components being independent.
+    pub fn log_kinematic_density_over(
+        &self,
+        previous: &Particle,
+        next: &Particle,
+        keep: &dyn Fn(usize) -> bool,
+    ) -> f64 {
         let (mean, sigma) = self.kinematic_law(previous);
         (0..self.space.dim())
+            .filter(|&j| keep(j))
             .map(|j| {
                 self.settings
                     .noise
@@ -324,7 +351,7 @@ impl smc_core::Dynamics for TrackerDynamics {
 
     fn sample<R: Rng + ?Sized>(&self, previous: &Particle, rng: &mut R) -> Particle {
         if self.draws_jump(rng) {
-            return self.sample_jump(previous, rng);
+            return self.sample_jump(previous, rng, |rng| self.sample_kinematics(previous, rng));
         }
         let mut next = *previous;
         next.prev = previous.now;
@@ -337,8 +364,8 @@ impl smc_core::Dynamics for TrackerDynamics {
     /// every proposal, so their densities cancel (see [`TrackerDynamics::sample_hidden`]); with a
     /// reacquisition component, the mixture density of the particle's component.
     fn log_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        self.log_with_jump(previous, next, JumpDensity::Prior, || {
-            self.log_kinematic_density(previous, next)
+        self.log_with_jump(previous, next, JumpDensity::Prior, |keep| {
+            self.log_kinematic_density_over(previous, next, keep)
         })
     }
 }

@@ -1,11 +1,11 @@
 //! The jump component of the transition prior: reacquisition after an occlusion, drawn around
 //! the constant-velocity extrapolation of the last confidently locked estimate (or the
-//! appearance's detection), and, opt-in, a jump for abrupt motion while the track is locked.
+//! appearance's detection), and, in `head`, a jump for abrupt motion while the track is locked.
 //!
 //! Beyond both papers, in the spirit of Isard & Blake's ICONDENSATION (a share of the particles
 //! from a second importance function, the rest from the prior). While the track is locked the
 //! component is absent and the filter is exactly the preset's (unless the abrupt-motion jump
-//! below is configured). Once the reported estimate stops
+//! below is configured, as `head` configures it). Once the reported estimate stops
 //! being locked (γ̂ high, α̂ not locked, or a contour whose size or elongation departs from the
 //! remembered one), every particle jumps with probability η = min(η_max, r · gap), `gap` the
 //! number of unlocked frames so far, to
@@ -26,13 +26,19 @@
 //! density of a particle is that of its own component, times its share.
 //!
 //! **Abrupt motion** ([`ReacquisitionSettings::detection_share`] η_d > 0, with an appearance
-//! model). While the track is locked, every particle jumps with probability η_d to a pose whose
-//! centre is a priori uniform over the appearance's search window W (area |W|), at rest, in the
-//! last estimate's shape: the target may have moved anywhere it is searched for. The jump is
-//! drawn around the appearance's detection d instead, α_k ~ N((d, shape), diag σ²), so its
-//! particles carry prior over proposal, 1 / (|W| N(centre; d, σ²)) ([`Reacquisition::uniform_area`];
-//! the other components' Gaussians cancel), and the prior itself becomes a weighted proposal
-//! ([`crate::proposal::WeightedPrior`]). A detection wins the posterior only where its likelihood
+//! model). While the track is locked, every particle jumps with probability η_d to a centre that
+//! is a priori uniform over the appearance's search window W (area |W|), at rest: the target may
+//! have moved anywhere it is searched for. Its size and shape go on as a continuation carries
+//! them, so a head that jumps while the camera zooms keeps zooming: the jump draws a
+//! continuation (from the prior, or from the motion proposal) and moves its centre only. The
+//! centre is drawn around the appearance's detection d, N(d, σ²), so the jump's prior density is
+//! η_d p_shape / |W| and the density it is drawn from η_d q_shape N(centre; d, σ²), p_shape and
+//! q_shape the prior's and the proposal's continuation densities of the size and shape
+//! ([`log_mixture_density`]): its particles carry the continuation's own ratio for the shape,
+//! times 1 / (|W| N(centre; d, σ²)) for the centre ([`Reacquisition::uniform_area`]), and the
+//! prior itself becomes a weighted proposal ([`crate::proposal::WeightedPrior`]). A jump that
+//! kept the last estimate's shape instead escaped the prior's penalty on a fast zoom, and held
+//! the box at the old size (docs/DECISIONS.md). A detection wins the posterior only where its likelihood
 //! beats the continuation's by that factor, so one that merely ties with the target — a patch of
 //! background while the face turns — does not capture the track as readily as a share of the
 //! *model* would. Once the track is not locked, the reacquisition jump above takes over, its
@@ -67,13 +73,14 @@ pub struct ReacquisitionSettings {
     pub share_rate: f64,
     /// η_max: the largest jump share.
     pub max_share: f64,
-    /// η_d: the share of the prior that jumps while the track is locked (abrupt motion; with an
-    /// appearance model only). A priori the jump's centre is uniform over the appearance's
+    /// η_d: the share of the prior whose centre jumps while the track is locked, its size and
+    /// shape going on as a continuation's (abrupt motion; with an appearance model only). A
+    /// priori the jump's centre is uniform over the appearance's
     /// search window, the window the target is believed to be in; it is drawn around the
     /// appearance's detection, so a particle there is weighted by 1 / (window area × the
     /// Gaussian's density): it wins only where its likelihood beats the continuation's by that
-    /// much. 0, the default and `head`'s, draws no jump while locked (docs/RESULTS.md measures
-    /// both).
+    /// much. 0, the default, draws no jump while locked; `head` draws
+    /// [`crate::HEAD_DETECTION_SHARE`] (docs/DECISIONS.md measures both).
     pub detection_share: f64,
     /// Translation spread of the jump at the first unlocked frame, pixels.
     pub spread: f64,
@@ -276,22 +283,53 @@ impl Reacquisition {
         (now, prev)
     }
 
+    /// Whether the jump moves the centre only, the size and shape being a continuation's: the
+    /// abrupt-motion jump, whose centre is uniform over the search window a priori.
+    pub fn moves_centre_only(&self) -> bool {
+        self.uniform_area.is_some()
+    }
+
+    /// Sets the centre of `now` to a draw around the jump's mean centre, and that of `prev` to
+    /// the same point (at rest), leaving the size and shape of both: a continuation's state made
+    /// a jump that moves the centre only.
+    pub fn sample_centre<R: Rng + ?Sized>(
+        &self,
+        space: ShapeSpace,
+        now: &mut StateVector,
+        prev: &mut StateVector,
+        rng: &mut R,
+    ) {
+        for j in (0..space.dim()).filter(|&j| space.is_translation(j)) {
+            let z: f64 = StandardNormal.sample(rng);
+            now[j] = self.mean[j] + self.sigmas[j] * z;
+            prev[j] = now[j];
+        }
+    }
+
     /// Whether a particle with states (`now`, `prev`) can have come from a jump (rather than a
     /// continuation, which keeps α_{k−1} equal to its ancestor's α_k = `ancestor_now`).
     pub fn is_jump(ancestor_now: &StateVector, prev: &StateVector) -> bool {
         ancestor_now != prev
     }
 
-    /// log N(α_k; m_k, diag σ_k²) over the used dimensions (the α_{k−1} part is a point mass).
+    /// The log-density the jump draws α_k from: log N(α_k; m_k, diag σ_k²) over the used
+    /// dimensions (the α_{k−1} part is a point mass); for a jump that moves the centre only
+    /// ([`Reacquisition::moves_centre_only`]) the centre's Gaussian alone, the size and shape
+    /// being a continuation's ([`log_mixture_density`] adds their density).
     pub fn log_density(&self, space: ShapeSpace, now: &StateVector) -> f64 {
-        self.log_gaussian(space, now, |_| true)
+        if self.moves_centre_only() {
+            self.log_gaussian(space, now, |j| space.is_translation(j))
+        } else {
+            self.log_gaussian(space, now, |_| true)
+        }
     }
 
-    /// The jump's prior log-density: [`Reacquisition::log_density`], or with a uniform centre
-    /// ([`Reacquisition::uniform_area`]) −ln(area) plus the Gaussian of the other components.
+    /// The jump's prior log-density: [`Reacquisition::log_density`], or with a centre uniform
+    /// over the window ([`Reacquisition::uniform_area`]) −ln(area), the size and shape being a
+    /// continuation's as in [`Reacquisition::log_density`].
     pub fn log_prior_density(&self, space: ShapeSpace, now: &StateVector) -> f64 {
         match self.uniform_area {
-            Some(area) => self.log_gaussian(space, now, |j| !space.is_translation(j)) - area.ln(),
+            Some(area) => -area.ln(),
             None => self.log_density(space, now),
         }
     }
@@ -324,6 +362,10 @@ pub enum JumpDensity {
 
 /// log((1 − η) e^{log_continue}) for a continuation and log(η q(α_k)) for a jump, q the jump's
 /// `density`: the density of a particle under a mixture whose components have disjoint supports.
+/// A jump that moves the centre only ([`Reacquisition::moves_centre_only`]) adds
+/// `log_continue_shape`, the continuation's density of its size and shape (the marginal of
+/// `log_continue`'s law over the components other than the centre).
+#[allow(clippy::too_many_arguments)]
 pub fn log_mixture_density(
     component: Option<&Reacquisition>,
     space: ShapeSpace,
@@ -332,11 +374,18 @@ pub fn log_mixture_density(
     now: &StateVector,
     density: JumpDensity,
     log_continue: impl FnOnce() -> f64,
+    log_continue_shape: impl FnOnce() -> f64,
 ) -> f64 {
     match component {
         Some(c) if share > 0.0 => {
             if jumped {
+                let shape = if c.moves_centre_only() {
+                    log_continue_shape()
+                } else {
+                    0.0
+                };
                 share.ln()
+                    + shape
                     + match density {
                         JumpDensity::Prior => c.log_prior_density(space, now),
                         JumpDensity::Sampling => c.log_density(space, now),
@@ -410,18 +459,20 @@ mod tests {
             uniform_area: None,
         };
         let x = [0.5, -0.5, 0.0, 0.0, 0.0, 0.0];
+        let never = || -> f64 { unreachable!() };
         for density in [JumpDensity::Prior, JumpDensity::Sampling] {
-            let jump =
-                log_mixture_density(Some(&r), space, 0.3, true, &x, density, || unreachable!());
+            // A jump that moves the whole pose reads neither continuation density.
+            let jump = log_mixture_density(Some(&r), space, 0.3, true, &x, density, never, never);
             assert!((jump - (0.3f64.ln() + r.log_density(space, &x))).abs() < 1e-12);
-            let cont = log_mixture_density(Some(&r), space, 0.3, false, &x, density, || -2.0);
+            let cont =
+                log_mixture_density(Some(&r), space, 0.3, false, &x, density, || -2.0, never);
             assert!((cont - (0.7f64.ln() - 2.0)).abs() < 1e-12);
             assert_eq!(
-                log_mixture_density(None, space, 0.3, true, &x, density, || -2.0),
+                log_mixture_density(None, space, 0.3, true, &x, density, || -2.0, never),
                 -2.0
             );
             assert_eq!(
-                log_mixture_density(Some(&r), space, 0.0, false, &x, density, || -2.0),
+                log_mixture_density(Some(&r), space, 0.0, false, &x, density, || -2.0, never),
                 -2.0
             );
         }
@@ -429,7 +480,9 @@ mod tests {
 
     #[test]
     fn a_jump_uniform_over_the_window_is_weighted_by_prior_over_proposal() {
-        // Odobez space: translation in slots 0 and 1, scale and shape in 2 and 3.
+        // Odobez space: translation in slots 0 and 1, scale and shape in 2 and 3. The jump
+        // moves the centre of a continuation's state, so its size and shape carry the
+        // continuation's densities: here −1.5 under the prior and −0.5 under the proposal.
         let space = ShapeSpace::Odobez;
         let r = Reacquisition {
             share: 0.1,
@@ -438,30 +491,36 @@ mod tests {
             sigmas: [3.0, 3.0, 0.3, 0.01, 1.0, 1.0],
             uniform_area: Some(4000.0),
         };
+        assert!(r.moves_centre_only());
         let gaussian = |x: f64, m: f64, s: f64| {
             -0.5 * ((x - m) / s).powi(2) - s.ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
         };
+        let (prior_shape, proposal_shape) = (-1.5, -0.5);
         for x in [
             [10.0, 20.0, 30.0, 1.0, 0.0, 0.0],
             [16.0, 14.0, 30.5, 0.99, 0.0, 0.0],
             [-40.0, 90.0, 29.0, 1.02, 0.0, 0.0],
         ] {
-            let shape = gaussian(x[2], 30.0, 0.3) + gaussian(x[3], 1.0, 0.01);
-            let proposal = gaussian(x[0], 10.0, 3.0) + gaussian(x[1], 20.0, 3.0) + shape;
-            assert!((r.log_density(space, &x) - proposal).abs() < 1e-9);
-            // The prior: the centre uniform over 4000 px², the same Gaussian elsewhere, so
-            // the weight's ratio is 1 / (area · N(centre; detection, σ)) whatever the shape.
-            let prior = shape - 4000f64.ln();
-            assert!((r.log_prior_density(space, &x) - prior).abs() < 1e-9);
-            let jump =
-                |density| log_mixture_density(Some(&r), space, 0.1, true, &x, density, || 0.0);
-            assert!(
-                (jump(JumpDensity::Prior) - jump(JumpDensity::Sampling) - (prior - proposal)).abs()
-                    < 1e-9
-            );
+            // The centre's densities: N(centre; detection, σ²) drawn from, 1 / area a priori.
+            let centre = gaussian(x[0], 10.0, 3.0) + gaussian(x[1], 20.0, 3.0);
+            assert!((r.log_density(space, &x) - centre).abs() < 1e-9);
+            assert!((r.log_prior_density(space, &x) + 4000f64.ln()).abs() < 1e-9);
+            let jump = |density, shape: f64| {
+                log_mixture_density(Some(&r), space, 0.1, true, &x, density, || 0.0, || shape)
+            };
+            let prior = jump(JumpDensity::Prior, prior_shape);
+            let proposal = jump(JumpDensity::Sampling, proposal_shape);
+            assert!((prior - (0.1f64.ln() + prior_shape - 4000f64.ln())).abs() < 1e-9);
+            assert!((proposal - (0.1f64.ln() + proposal_shape + centre)).abs() < 1e-9);
+            // The weight's ratio: 1 / (area · N(centre)) for the centre, the continuation's own
+            // ratio for the size and shape.
+            let ratio = prior - proposal;
+            let expected = (prior_shape - proposal_shape) - 4000f64.ln() - centre;
+            assert!((ratio - expected).abs() < 1e-9);
             // A continuation's prior and proposal are the same.
-            let cont =
-                |density| log_mixture_density(Some(&r), space, 0.1, false, &x, density, || -3.0);
+            let cont = |density| {
+                log_mixture_density(Some(&r), space, 0.1, false, &x, density, || -3.0, || 0.0)
+            };
             assert_eq!(cont(JumpDensity::Prior), cont(JumpDensity::Sampling));
         }
         // Without the window, the Gaussian is the prior too.

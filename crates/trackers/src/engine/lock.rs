@@ -41,7 +41,7 @@ impl ParticleTracker {
         let (share, mut mean, mut velocity, uniform_area) = if gap == 0 {
             // Locked: the abrupt-motion jump, when configured and there is a detection. A priori
             // the target is anywhere in the search window; the detection only proposes where.
-            // The jump keeps the last estimate's shape.
+            // The jump moves the centre only (`TrackerDynamics::sample_jump`).
             if settings.detection_share <= 0.0 {
                 return None;
             }

@@ -88,9 +88,10 @@ pub struct ParticleTracker {
     visibility: Option<Visibility>,
     /// The target's appearance and its lock chain, when the configuration has them.
     appearance: Option<Appearance>,
-    /// This frame's best appearance detection while the track is not locked, and on every frame
-    /// with [`crate::ReacquisitionSettings::detection_share`] > 0: where the jump component draws
-    /// (see [`crate::dynamics::reacquisition`]).
+    /// This frame's best appearance detection while the track is not locked, and while it is
+    /// with [`crate::ReacquisitionSettings::detection_share`] > 0 when the detection reads as the
+    /// target (`Appearance::looks_like_target`): where the jump component draws (see
+    /// [`crate::dynamics::reacquisition`]).
     detection: Option<[f64; 2]>,
     size: (usize, usize),
     frame: usize,
@@ -401,6 +402,14 @@ impl Tracker for ParticleTracker {
                     .is_some_and(|r| unlocked || r.detection_share > 0.0);
                 if jumps {
                     self.detection = appearance.detect(&e);
+                    // While locked, the abrupt-motion jump draws only at a detection that reads
+                    // as the target: where it has just vanished, the best patch of background
+                    // would take the track before the lock chain says lost.
+                    if !unlocked {
+                        self.detection = self.detection.filter(|&[x, y]| {
+                            appearance.looks_like_target(&Ellipse { cx: x, cy: y, ..e })
+                        });
+                    }
                 }
             }
         }

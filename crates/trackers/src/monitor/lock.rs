@@ -97,6 +97,12 @@ impl LockChain {
         }
     }
 
+    /// Whether an observation `q` reads as the target rather than background: the locked
+    /// state's emission at least the lost one's (q nearer the locked centre).
+    pub fn reads_as_locked(&self, q: f64) -> bool {
+        (q - self.centres[LOCKED]).abs() <= (q - self.centres[LOST]).abs()
+    }
+
     /// P(lost) after the last step.
     pub fn p_lost(&self) -> f64 {
         self.belief[LOST]
@@ -121,6 +127,23 @@ impl LockChain {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_observation_reads_as_the_nearer_state() {
+        let chain = LockChain::new(0.95, 0.3, [1.0, 0.0]).unwrap();
+        for (q, locked) in [
+            (0.9, true),
+            (0.51, true),
+            (0.5, true),
+            (0.49, false),
+            (-0.2, false),
+        ] {
+            assert_eq!(chain.reads_as_locked(q), locked, "q = {q}");
+        }
+        // With other centres the boundary is their midpoint.
+        let chain = LockChain::new(0.95, 0.3, [0.8, 0.2]).unwrap();
+        assert!(chain.reads_as_locked(0.55) && !chain.reads_as_locked(0.45));
+    }
 
     #[test]
     fn a_run_of_background_raises_p_lost_and_a_match_lowers_it() {

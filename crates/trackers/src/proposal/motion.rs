@@ -88,6 +88,41 @@ impl ClusterMotion {
         }
     }
 
+    /// log N(x; mean, Λ) over the used dimensions that `keep` accepts: the marginal of the
+    /// Gaussian over them (Λ's block of those rows and columns).
+    pub fn log_density_over(
+        &self,
+        space: ShapeSpace,
+        mean: &StateVector,
+        x: &StateVector,
+        keep: &dyn Fn(usize) -> bool,
+    ) -> f64 {
+        let kept: Vec<usize> = (0..space.dim()).filter(|&j| keep(j)).collect();
+        if kept.len() == space.dim() {
+            return self.log_density(space, mean, x);
+        }
+        let full = self.chol * self.chol.transpose();
+        let mut block = Matrix6::identity();
+        let mut diff = Vector6::zeros();
+        for (a, &i) in kept.iter().enumerate() {
+            diff[a] = x[i] - mean[i];
+            for (b, &j) in kept.iter().enumerate() {
+                block[(a, b)] = full[(i, j)];
+            }
+        }
+        let Some(chol) = block.cholesky() else {
+            return f64::NEG_INFINITY;
+        };
+        let l = chol.l();
+        let Some(z) = l.solve_lower_triangular(&diff) else {
+            return f64::NEG_INFINITY;
+        };
+        let m = kept.len();
+        let q: f64 = (0..m).map(|j| z[j] * z[j]).sum();
+        let log_det: f64 = (0..m).map(|j| l[(j, j)].ln()).sum();
+        -0.5 * q - log_det - 0.5 * m as f64 * (2.0 * std::f64::consts::PI).ln()
+    }
+
     /// log N(x; mean, Λ) over the used dimensions.
     pub fn log_density(&self, space: ShapeSpace, mean: &StateVector, x: &StateVector) -> f64 {
         let d = space.dim();
@@ -198,30 +233,13 @@ impl smc_core::Proposal for MotionProposal<'_> {
 
     fn sample<R: Rng + ?Sized>(&self, _index: usize, previous: &Particle, rng: &mut R) -> Particle {
         if self.dynamics.draws_jump(rng) {
-            return self.dynamics.sample_jump(previous, rng);
+            return self
+                .dynamics
+                .sample_jump(previous, rng, |rng| self.sample_kinematics(previous, rng));
         }
         let mut next = *previous;
         next.prev = previous.now;
-        let use_prior = self.prior_share(previous) > rng.random::<f64>();
-        match self.cluster(previous) {
-            Some(motion) if !use_prior => {
-                let mean = self.mean(previous, motion);
-                let d = self.dynamics.space.dim();
-                let mut z = Vector6::zeros();
-                for j in 0..d {
-                    z[j] = StandardNormal.sample(rng);
-                }
-                let e = motion.chol * z;
-                next.now = mean;
-                for j in 0..d {
-                    next.now[j] += e[j];
-                }
-                self.dynamics
-                    .space
-                    .clamp(&mut next.now, &self.dynamics.bounds);
-            }
-            _ => next.now = self.dynamics.sample_kinematics(previous, rng),
-        }
+        next.now = self.sample_kinematics(previous, rng);
         self.dynamics.sample_hidden(previous, &mut next, rng);
         next
     }
@@ -232,28 +250,66 @@ impl smc_core::Proposal for MotionProposal<'_> {
     /// (`TrackerDynamics::log_hidden_exploration_ratio`, 0 by default).
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
         self.dynamics
-            .log_with_jump(previous, next, JumpDensity::Sampling, || {
-                self.log_continuation_density(previous, next)
+            .log_with_jump(previous, next, JumpDensity::Sampling, |keep| {
+                self.log_continuation_density(previous, next, keep)
             })
             - self.dynamics.log_hidden_exploration_ratio(previous, next)
     }
 }
 
 impl MotionProposal<'_> {
-    /// log q of a continuation: Eq. 16, or its mixture with the prior by γ.
-    fn log_continuation_density(&self, previous: &Particle, next: &Particle) -> f64 {
+    /// Draws the kinematic state of a continuation: Eq. 16, or the prior with probability γ
+    /// (see [`MotionProposal::occlusion_aware`]) or for a particle without a cluster motion.
+    fn sample_kinematics<R: Rng + ?Sized>(&self, previous: &Particle, rng: &mut R) -> StateVector {
+        let use_prior = self.prior_share(previous) > rng.random::<f64>();
+        match self.cluster(previous) {
+            Some(motion) if !use_prior => {
+                let mut now = self.mean(previous, motion);
+                let d = self.dynamics.space.dim();
+                let mut z = Vector6::zeros();
+                for j in 0..d {
+                    z[j] = StandardNormal.sample(rng);
+                }
+                let e = motion.chol * z;
+                for j in 0..d {
+                    now[j] += e[j];
+                }
+                self.dynamics.space.clamp(&mut now, &self.dynamics.bounds);
+                now
+            }
+            _ => self.dynamics.sample_kinematics(previous, rng),
+        }
+    }
+
+    /// log q of a continuation over the components `keep` accepts: Eq. 16, or its mixture with
+    /// the prior by γ.
+    fn log_continuation_density(
+        &self,
+        previous: &Particle,
+        next: &Particle,
+        keep: &dyn Fn(usize) -> bool,
+    ) -> f64 {
         let Some(motion) = self.cluster(previous) else {
-            return self.dynamics.log_kinematic_density(previous, next);
+            return self
+                .dynamics
+                .log_kinematic_density_over(previous, next, keep);
         };
-        let log_motion =
-            motion.log_density(self.dynamics.space, &self.mean(previous, motion), &next.now);
+        let log_motion = motion.log_density_over(
+            self.dynamics.space,
+            &self.mean(previous, motion),
+            &next.now,
+            keep,
+        );
         let share = self.prior_share(previous);
         if share <= 0.0 {
             return log_motion;
         }
         // The mixture (1 − γ) q_motion + γ p_prior, in logs.
         let a = (1.0 - share).ln() + log_motion;
-        let b = share.ln() + self.dynamics.log_kinematic_density(previous, next);
+        let b = share.ln()
+            + self
+                .dynamics
+                .log_kinematic_density_over(previous, next, keep);
         let m = a.max(b);
         if m == f64::NEG_INFINITY {
             return m;
@@ -309,6 +365,90 @@ mod tests {
         let expected =
             -0.5 * (1.0 + 1.0 + 0.25) - (2.0f64).ln() - 2.0 * (2.0 * std::f64::consts::PI).ln();
         assert!((m.log_density(ShapeSpace::Odobez, &[0.0; 6], &x) - expected).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_marginal_density_reads_the_block_of_the_kept_components() {
+        // Translation and scale correlated; the marginal over the size and shape is the
+        // Gaussian of Λ's block, here diagonal: the scale's and the shape's own.
+        let space = ShapeSpace::Odobez;
+        let mut cov = Matrix6::zeros();
+        cov[(0, 0)] = 4.0;
+        cov[(1, 1)] = 1.0;
+        cov[(2, 2)] = 0.5;
+        cov[(0, 2)] = 0.8;
+        cov[(2, 0)] = 0.8;
+        let m = ClusterMotion::new(space, [0.0; 6], &cov, &[0.0, 0.0, 1.0, 0.5, 0.0, 0.0], true)
+            .unwrap();
+        let x = [2.0, -1.0, 0.7, -0.2, 0.0, 0.0];
+        let gaussian = |x: f64, var: f64| {
+            -0.5 * x * x / var - 0.5 * var.ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
+        };
+        let shape = m.log_density_over(space, &[0.0; 6], &x, &|j| j >= 2);
+        assert!((shape - (gaussian(0.7, 1.5) + gaussian(-0.2, 0.25))).abs() < 1e-12);
+        // Every component kept: the full density; a correlated pair is not the product of
+        // its marginals.
+        let all = m.log_density_over(space, &[0.0; 6], &x, &|_| true);
+        assert_eq!(all, m.log_density(space, &[0.0; 6], &x));
+        let centre = m.log_density_over(space, &[0.0; 6], &x, &|j| j < 2);
+        assert!((all - (centre + shape)).abs() > 1e-3);
+    }
+
+    #[test]
+    fn the_abrupt_motion_jump_moves_a_continuations_centre_and_keeps_its_ratio() {
+        use crate::dynamics::reacquisition::Reacquisition;
+        use smc_core::{Dynamics, Proposal};
+        let (mut dynamics, clusters, mut previous) = setup();
+        // The ancestor was growing: its size velocity must survive the jump.
+        previous.prev[2] = 24.0;
+        let area = 5000.0;
+        dynamics.reacquisition = Some(Reacquisition {
+            share: 1.0,
+            mean: [150.0, 60.0, 0.0, 0.0, 0.0, 0.0],
+            velocity: [0.0; 6],
+            sigmas: [3.0, 3.0, 1.0, 1.0, 1.0, 1.0],
+            uniform_area: Some(area),
+        });
+        let proposal = MotionProposal {
+            dynamics: &dynamics,
+            clusters: &clusters,
+            occlusion_aware: false,
+        };
+        let mut rng = <rand_pcg::Pcg64Mcg as rand::SeedableRng>::seed_from_u64(11);
+        let (n, mut scale) = (4000, 0.0);
+        for _ in 0..n {
+            let next = proposal.sample(0, &previous, &mut rng);
+            // At rest at its new centre; its previous size is the ancestor's.
+            assert_eq!(next.now[..2], next.prev[..2]);
+            assert_eq!(next.prev[2..4], previous.now[2..4]);
+            assert!(Reacquisition::is_jump(&previous.now, &next.prev));
+            scale += next.now[2];
+            // p / q: 1 / (area · N(centre)) for the centre, the continuation's p / q for the
+            // size and shape (the prior's AR2 over the motion's Gaussian).
+            let shape = |j: usize| j >= 2;
+            let centre = dynamics
+                .reacquisition
+                .as_ref()
+                .unwrap()
+                .log_density(dynamics.space, &next.now);
+            let continuation = dynamics.log_kinematic_density_over(&previous, &next, &shape)
+                - clusters[0].log_density_over(
+                    dynamics.space,
+                    &proposal.mean(&previous, &clusters[0]),
+                    &next.now,
+                    &shape,
+                );
+            let weight = Dynamics::log_density(&dynamics, &previous, &next)
+                - proposal.log_density(0, &previous, &next);
+            let expected = continuation - area.ln() - centre;
+            assert!((weight - expected).abs() < 1e-9, "{weight} vs {expected}");
+        }
+        // The size is the motion proposal's: the ancestor's plus the cluster's 0.3.
+        assert!(
+            (scale / n as f64 - 25.3).abs() < 0.02,
+            "{}",
+            scale / n as f64
+        );
     }
 
     fn setup() -> (
