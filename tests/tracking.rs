@@ -275,8 +275,8 @@ fn head_follows_a_target_that_zooms_out_and_back() {
     // towards a remembered one (`dynamics.shape_reversion` 0.05, which gains on the development
     // set) fails here: the box stays near 43 px while the target is 20 px, mean IoU 0.48 on
     // seed 1 (docs/DECISIONS.md), as did an abrupt-motion jump that kept the last estimate's
-    // size (0.47 on seeds 1 and 2: its particles escaped the prior's penalty on the fast shrink
-    // and held the old size). The per-seed mean IoU moves between 0.64 and 0.79 with the draws
+    // size: its particles escaped the prior's penalty on the fast shrink and held the old size
+    // (docs/DECISIONS.md). The per-seed mean IoU moves between 0.64 and 0.79 with the draws
     // alone, so the test reads eight seeds: `head`'s, seeds 1–8, 0.642, 0.697, 0.705, 0.726,
     // 0.743, 0.725, 0.766, 0.759 (without its jump 0.791, 0.723, 0.728, 0.689, 0.731, 0.700,
     // 0.747, 0.687).

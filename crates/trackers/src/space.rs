@@ -253,6 +253,26 @@ pub(crate) fn check_initial(ellipse: &Ellipse) -> crate::Result<()> {
     Ok(())
 }
 
+/// Which components of a kinematic state a density reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Components {
+    /// Every used component.
+    All,
+    /// The size and shape: every used component but the centre (what an abrupt-motion jump
+    /// keeps of a continuation, see [`crate::dynamics::reacquisition`]).
+    SizeAndShape,
+}
+
+impl Components {
+    /// Whether slot `j` of a state of `space` is among these components.
+    pub fn includes(self, space: ShapeSpace, j: usize) -> bool {
+        match self {
+            Components::All => true,
+            Components::SizeAndShape => !space.is_translation(j),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -482,9 +482,12 @@ impl Appearance {
     /// the abrupt-motion jump draws only at a detection that does, so that where the target has
     /// vanished the best patch of background in the window takes no particles.
     pub fn looks_like_target(&self, e: &Ellipse) -> bool {
-        let (inside, _) = counts(&self.settings, &self.window, self.bins.len(), e);
+        // A ring of zero width: only the ellipse's own box is read.
+        let (inside, _) = self
+            .window
+            .target_and_ring_counts(self.bins.len(), e, (1.0, 1.0));
         self.lock
-            .reads_as_locked(self.lock_observation(inside.as_ref()))
+            .reads_as_locked(self.lock_observation(Histogram::from_counts(inside).as_ref()))
     }
 
     /// The lock chain's observation q = (ρ − ρ_bg) / (1 − ρ_bg) of a histogram read inside an

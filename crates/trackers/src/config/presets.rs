@@ -317,7 +317,8 @@ impl std::str::FromStr for Preset {
 /// is locked ([`ReacquisitionSettings::detection_share`], η_d): one particle in ten, enough to
 /// carry the filter to a head that moved beyond the AR2 prior's reach in one frame (the stress
 /// suite's `shake`), few enough that the continuation holds a target the detection mistakes for
-/// a patch of background. The share hardly matters between 0.05 and 0.2 (docs/DECISIONS.md).
+/// a patch of background. For the jump's earlier form, which kept the last estimate's size, the
+/// share hardly mattered between 0.05 and 0.2 (docs/DECISIONS.md).
 pub const HEAD_DETECTION_SHARE: f64 = 0.1;
 
 /// The fixed clutter density λ, edges per pixel, of `w-fixed`, and of every configuration that

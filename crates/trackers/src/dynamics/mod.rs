@@ -16,7 +16,7 @@ use rand::Rng;
 
 use crate::dynamics::reacquisition::{JumpDensity, Reacquisition, log_mixture_density};
 use crate::particle::Particle;
-use crate::space::{ShapeBounds, ShapeSpace, StateVector};
+use crate::space::{Components, ShapeBounds, ShapeSpace, StateVector};
 pub mod reacquisition;
 mod settings;
 pub use settings::{DynamicsSettings, NoiseKind};
@@ -119,25 +119,24 @@ impl TrackerDynamics {
     }
 
     /// The density of `next` under the mixture of the jump (share η, its `density`) and the
-    /// continuation whose log-density `log_continue(keep)` computes over the components `keep`
-    /// accepts (see [`crate::dynamics::reacquisition::log_mixture_density`]).
+    /// continuation whose log-density over `Components` `log_continue` computes (see
+    /// [`crate::dynamics::reacquisition::log_mixture_density`]).
     pub fn log_with_jump(
         &self,
         previous: &Particle,
         next: &Particle,
         density: JumpDensity,
-        log_continue: impl Fn(&dyn Fn(usize) -> bool) -> f64,
+        log_continue: impl Fn(Components) -> f64,
     ) -> f64 {
-        let space = self.space;
         log_mixture_density(
             self.reacquisition.as_ref(),
-            space,
+            self.space,
             self.jump_share(),
             Reacquisition::is_jump(&previous.now, &next.prev),
             &next.now,
             density,
-            || log_continue(&|_| true),
-            || log_continue(&|j| !space.is_translation(j)),
+            || log_continue(Components::All),
+            || log_continue(Components::SizeAndShape),
         )
     }
 
@@ -153,8 +152,8 @@ impl TrackerDynamics {
     /// The density the prior draws `next` from: [`smc_core::Dynamics::log_density`] with the
     /// jump's proposal in place of its prior.
     pub fn log_sampling_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        self.log_with_jump(previous, next, JumpDensity::Sampling, |keep| {
-            self.log_kinematic_density_over(previous, next, keep)
+        self.log_with_jump(previous, next, JumpDensity::Sampling, |which| {
+            self.log_kinematic_density_over(previous, next, which)
         })
     }
 
@@ -323,20 +322,20 @@ impl TrackerDynamics {
 
     /// log p(x_k | x_{k−1}, x_{k−2}) of the kinematic part (Odobez Eq. 17 for Cauchy noise).
     pub fn log_kinematic_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        self.log_kinematic_density_over(previous, next, &|_| true)
+        self.log_kinematic_density_over(previous, next, Components::All)
     }
 
-    /// [`TrackerDynamics::log_kinematic_density`] over the components `keep` accepts: the
-    /// marginal, the components being independent.
+    /// [`TrackerDynamics::log_kinematic_density`] over `which` components: the marginal, the
+    /// components being independent.
     pub fn log_kinematic_density_over(
         &self,
         previous: &Particle,
         next: &Particle,
-        keep: &dyn Fn(usize) -> bool,
+        which: Components,
     ) -> f64 {
         let (mean, sigma) = self.kinematic_law(previous);
         (0..self.space.dim())
-            .filter(|&j| keep(j))
+            .filter(|&j| which.includes(self.space, j))
             .map(|j| {
                 self.settings
                     .noise
@@ -364,8 +363,8 @@ impl smc_core::Dynamics for TrackerDynamics {
     /// every proposal, so their densities cancel (see [`TrackerDynamics::sample_hidden`]); with a
     /// reacquisition component, the mixture density of the particle's component.
     fn log_density(&self, previous: &Particle, next: &Particle) -> f64 {
-        self.log_with_jump(previous, next, JumpDensity::Prior, |keep| {
-            self.log_kinematic_density_over(previous, next, keep)
+        self.log_with_jump(previous, next, JumpDensity::Prior, |which| {
+            self.log_kinematic_density_over(previous, next, which)
         })
     }
 }

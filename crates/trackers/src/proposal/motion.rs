@@ -9,7 +9,7 @@ use rand_distr::{Distribution, StandardNormal};
 use crate::dynamics::TrackerDynamics;
 use crate::dynamics::reacquisition::JumpDensity;
 use crate::particle::Particle;
-use crate::space::{STATE_SLOTS, ShapeSpace, StateVector, axpy};
+use crate::space::{Components, STATE_SLOTS, ShapeSpace, StateVector, axpy};
 
 /// The motion of one cluster, as a Gaussian over the state increment.
 #[derive(Debug, Clone, PartialEq)]
@@ -88,25 +88,29 @@ impl ClusterMotion {
         }
     }
 
-    /// log N(x; mean, Λ) over the used dimensions that `keep` accepts: the marginal of the
-    /// Gaussian over them (Λ's block of those rows and columns).
+    /// log N(x; mean, Λ) over the used dimensions among `which`: the marginal of the Gaussian
+    /// over them (Λ's block of those rows and columns).
     pub fn log_density_over(
         &self,
         space: ShapeSpace,
         mean: &StateVector,
         x: &StateVector,
-        keep: &dyn Fn(usize) -> bool,
+        which: Components,
     ) -> f64 {
-        let kept: Vec<usize> = (0..space.dim()).filter(|&j| keep(j)).collect();
-        if kept.len() == space.dim() {
+        if which == Components::All {
             return self.log_density(space, mean, x);
+        }
+        let (mut kept, mut m) = ([0usize; STATE_SLOTS], 0);
+        for j in (0..space.dim()).filter(|&j| which.includes(space, j)) {
+            kept[m] = j;
+            m += 1;
         }
         let full = self.chol * self.chol.transpose();
         let mut block = Matrix6::identity();
         let mut diff = Vector6::zeros();
-        for (a, &i) in kept.iter().enumerate() {
+        for (a, &i) in kept[..m].iter().enumerate() {
             diff[a] = x[i] - mean[i];
-            for (b, &j) in kept.iter().enumerate() {
+            for (b, &j) in kept[..m].iter().enumerate() {
                 block[(a, b)] = full[(i, j)];
             }
         }
@@ -117,7 +121,6 @@ impl ClusterMotion {
         let Some(z) = l.solve_lower_triangular(&diff) else {
             return f64::NEG_INFINITY;
         };
-        let m = kept.len();
         let q: f64 = (0..m).map(|j| z[j] * z[j]).sum();
         let log_det: f64 = (0..m).map(|j| l[(j, j)].ln()).sum();
         -0.5 * q - log_det - 0.5 * m as f64 * (2.0 * std::f64::consts::PI).ln()
@@ -250,8 +253,8 @@ impl smc_core::Proposal for MotionProposal<'_> {
     /// (`TrackerDynamics::log_hidden_exploration_ratio`, 0 by default).
     fn log_density(&self, _index: usize, previous: &Particle, next: &Particle) -> f64 {
         self.dynamics
-            .log_with_jump(previous, next, JumpDensity::Sampling, |keep| {
-                self.log_continuation_density(previous, next, keep)
+            .log_with_jump(previous, next, JumpDensity::Sampling, |which| {
+                self.log_continuation_density(previous, next, which)
             })
             - self.dynamics.log_hidden_exploration_ratio(previous, next)
     }
@@ -281,24 +284,24 @@ impl MotionProposal<'_> {
         }
     }
 
-    /// log q of a continuation over the components `keep` accepts: Eq. 16, or its mixture with
+    /// log q of a continuation over `which` components: Eq. 16, or its mixture with
     /// the prior by γ.
     fn log_continuation_density(
         &self,
         previous: &Particle,
         next: &Particle,
-        keep: &dyn Fn(usize) -> bool,
+        which: Components,
     ) -> f64 {
         let Some(motion) = self.cluster(previous) else {
             return self
                 .dynamics
-                .log_kinematic_density_over(previous, next, keep);
+                .log_kinematic_density_over(previous, next, which);
         };
         let log_motion = motion.log_density_over(
             self.dynamics.space,
             &self.mean(previous, motion),
             &next.now,
-            keep,
+            which,
         );
         let share = self.prior_share(previous);
         if share <= 0.0 {
@@ -309,7 +312,7 @@ impl MotionProposal<'_> {
         let b = share.ln()
             + self
                 .dynamics
-                .log_kinematic_density_over(previous, next, keep);
+                .log_kinematic_density_over(previous, next, which);
         let m = a.max(b);
         if m == f64::NEG_INFINITY {
             return m;
@@ -384,13 +387,13 @@ mod tests {
         let gaussian = |x: f64, var: f64| {
             -0.5 * x * x / var - 0.5 * var.ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
         };
-        let shape = m.log_density_over(space, &[0.0; 6], &x, &|j| j >= 2);
+        let shape = m.log_density_over(space, &[0.0; 6], &x, Components::SizeAndShape);
         assert!((shape - (gaussian(0.7, 1.5) + gaussian(-0.2, 0.25))).abs() < 1e-12);
         // Every component kept: the full density; a correlated pair is not the product of
-        // its marginals.
-        let all = m.log_density_over(space, &[0.0; 6], &x, &|_| true);
+        // its marginals (the centre's: its block, diagonal here).
+        let all = m.log_density_over(space, &[0.0; 6], &x, Components::All);
         assert_eq!(all, m.log_density(space, &[0.0; 6], &x));
-        let centre = m.log_density_over(space, &[0.0; 6], &x, &|j| j < 2);
+        let centre = gaussian(2.0, 4.0) + gaussian(-1.0, 1.0);
         assert!((all - (centre + shape)).abs() > 1e-3);
     }
 
@@ -425,18 +428,18 @@ mod tests {
             scale += next.now[2];
             // p / q: 1 / (area · N(centre)) for the centre, the continuation's p / q for the
             // size and shape (the prior's AR2 over the motion's Gaussian).
-            let shape = |j: usize| j >= 2;
+            let shape = Components::SizeAndShape;
             let centre = dynamics
                 .reacquisition
                 .as_ref()
                 .unwrap()
                 .log_density(dynamics.space, &next.now);
-            let continuation = dynamics.log_kinematic_density_over(&previous, &next, &shape)
+            let continuation = dynamics.log_kinematic_density_over(&previous, &next, shape)
                 - clusters[0].log_density_over(
                     dynamics.space,
                     &proposal.mean(&previous, &clusters[0]),
                     &next.now,
-                    &shape,
+                    shape,
                 );
             let weight = Dynamics::log_density(&dynamics, &previous, &next)
                 - proposal.log_density(0, &previous, &next);
