@@ -36,9 +36,10 @@ pub struct FilterSettings {
     /// Number of particles after resampling; `None` (the default) keeps N. Only takes effect at
     /// steps that resample.
     pub output_size: Option<usize>,
-    /// Propagate and weight particles on the rayon thread pool. Results are bit-identical to the
-    /// sequential path for any number of threads, because every particle draws from its own
-    /// generator. Default `false`: for cheap models the thread hand-off costs more than it saves.
+    /// Propagate and weight particles on the rayon thread pool (a tracker built on this filter
+    /// may run more of its work there too). Results are bit-identical to the sequential path for
+    /// any number of threads, because every particle draws from its own generator. Default
+    /// `false`: for cheap models the thread hand-off costs more than it saves.
     pub parallel: bool,
     /// Smallest number of particles handed to one rayon task (default 64).
     pub parallel_min_chunk: usize,

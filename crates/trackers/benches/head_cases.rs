@@ -15,6 +15,9 @@
 //!   [`TrackStatus::Lost`] (at most 100), and measures the updates that follow: the steady state
 //!   of a lost track searching for its target.
 //!
+//! The 640×360 case is also run with `filter.parallel` on a pool of two threads
+//! (`…_parallel2`): the same updates, the same estimates, spread over two cores.
+//!
 //! Without the development set beside the checkout the cases are skipped, saying so.
 
 use std::hint::black_box;
@@ -31,6 +34,8 @@ struct Case {
     label: [f64; 4],
     size: (usize, usize),
     width: f64,
+    /// Whether the case is also run on two threads.
+    parallel: bool,
 }
 
 const CASES: [Case; 3] = [
@@ -39,18 +44,21 @@ const CASES: [Case; 3] = [
         label: [160.0, 83.0, 56.0, 65.0],
         size: (640, 360),
         width: 67.0,
+        parallel: true,
     },
     Case {
         clip: "Freeman1",
         label: [253.0, 66.0, 23.0, 28.0],
         size: (352, 288),
         width: 26.0,
+        parallel: false,
     },
     Case {
         clip: "ytf_Albert_Brooks_0",
         label: [142.5, 67.5, 59.0, 59.0],
         size: (320, 240),
         width: 60.0,
+        parallel: false,
     },
 ];
 
@@ -158,8 +166,20 @@ fn head_cases(c: &mut Criterion) {
             }
         };
         let size = format!("{w}x{h}_target_{:.0}x{:.0}", 2.0 * head.a, 2.0 * head.b);
-        for lost in [false, true] {
-            let Ok(mut tracker) = build(Preset::Head.config(200, 1)) else {
+        let variants = [(false, false), (true, false)].into_iter().chain(
+            case.parallel
+                .then_some([(false, true), (true, true)])
+                .into_iter()
+                .flatten(),
+        );
+        for (lost, parallel) in variants {
+            let mut config = Preset::Head.config(200, 1);
+            config.filter.parallel = parallel;
+            let threads = if parallel { 2 } else { 1 };
+            let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(threads).build() else {
+                continue;
+            };
+            let Ok(mut tracker) = build(config) else {
                 continue;
             };
             let Ok(first) = frame(0, false) else {
@@ -181,15 +201,21 @@ fn head_cases(c: &mut Criterion) {
                     continue;
                 }
             }
-            let id = format!("{size}_{}", if lost { "lost" } else { "locked" });
+            let id = format!(
+                "{size}_{}{}",
+                if lost { "lost" } else { "locked" },
+                if parallel { "_parallel2" } else { "" }
+            );
             group.bench_function(BenchmarkId::from_parameter(id), |b| {
-                b.iter(|| {
-                    let k = order.next().unwrap_or(0);
-                    black_box(
-                        frame(k, lost)
-                            .and_then(|f| tracker.update(f))
-                            .map(|e| e.bbox),
-                    )
+                pool.install(|| {
+                    b.iter(|| {
+                        let k = order.next().unwrap_or(0);
+                        black_box(
+                            frame(k, lost)
+                                .and_then(|f| tracker.update(f))
+                                .map(|e| e.bbox),
+                        )
+                    });
                 });
             });
         }

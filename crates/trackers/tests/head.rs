@@ -291,35 +291,57 @@ fn a_tall_target_keeps_its_aspect() {
     }
 }
 
-/// The estimates of a 25-frame run of `config` on the moving target, every field.
-fn estimates(config: trackers::TrackerConfig) -> Vec<String> {
+/// The estimates of a 25-frame run of `config` on the moving target, hidden on frames 12–15,
+/// every field.
+fn estimates(config: trackers::TrackerConfig) -> Vec<trackers::Estimate> {
     let mut tracker = started(config);
     (1..25)
         .map(|k| {
-            let (g, c) = render(target_at(k, &(0..0)));
+            let (g, c) = render(target_at(k, &(12..16)));
             let mut e = tracker
                 .update(Frame::with_rgb(W, H, &g, &c).unwrap())
                 .unwrap();
             e.millis = 0.0;
-            format!("{e:?}")
+            e
         })
         .collect()
 }
 
 #[test]
 fn the_same_output_for_one_thread_or_many_and_sequentially() {
-    for seed in [1, 2] {
-        let sequential = estimates(Preset::Head.config(150, seed));
-        let mut parallel = Preset::Head.config(150, seed);
-        parallel.filter.parallel = true;
-        parallel.filter.parallel_min_chunk = 8;
-        for threads in [1, 3] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let run = pool.install(|| estimates(parallel.clone()));
-            assert_eq!(run, sequential, "seed {seed}, {threads} threads");
+    // `head` (five clusters following the first) and `m3` (twenty, each estimated in turn):
+    // with `filter.parallel` the motion and the detection run concurrently, and so do `head`'s
+    // clusters after the first.
+    for preset in [Preset::Head, Preset::M3] {
+        for seed in [1, 2] {
+            let sequential = estimates(preset.config(150, seed));
+            let text = |run: &[trackers::Estimate]| -> Vec<String> {
+                run.iter().map(|e| format!("{e:?}")).collect()
+            };
+            // The run goes through frames where the motion is estimated and frames where it
+            // fails (the target hidden): both paths are compared.
+            let (used, failed) = sequential.iter().fold((0, 0), |(u, f), e| {
+                (u + e.motion_clusters.0, f + e.motion_clusters.1)
+            });
+            assert!(
+                used > failed && failed > 0,
+                "{preset:?} seed {seed}: {used} used, {failed} failed"
+            );
+            let mut parallel = preset.config(150, seed);
+            parallel.filter.parallel = true;
+            parallel.filter.parallel_min_chunk = 8;
+            for threads in [1, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let run = pool.install(|| estimates(parallel.clone()));
+                assert_eq!(
+                    text(&run),
+                    text(&sequential),
+                    "{preset:?} seed {seed}, {threads} threads"
+                );
+            }
         }
     }
 }

@@ -41,10 +41,20 @@ pub struct MotionSettings {
     /// The robust estimator (Odobez §4.2). Default `motion_est::Settings::tracking()`: 0.1 px
     /// tolerances, at most 8 iterations per level — a particle cloud needs no better.
     pub estimator: motion_est::Settings,
-    /// Start each cluster's estimate from the previous cluster's (default true): clusters of one
-    /// frame cover nearly the same region, so the estimator can skip its coarse levels.
+    /// Start each cluster's estimate from the last converged one before it (default true):
+    /// clusters of one frame cover nearly the same region, so the estimator can skip its coarse
+    /// levels. With [`Self::follow_first`], from the first cluster's estimate.
     #[serde(default = "yes")]
     pub warm_start: bool,
+    /// Treat the clusters as one region (default false: each is estimated in turn, as Odobez
+    /// does). The first cluster is estimated cold, every later one from its estimate, converged
+    /// or not, so that they can run concurrently with `filter.parallel`; and when the first
+    /// cluster's motion cannot be estimated (no dominant motion within the estimator's
+    /// reliability ceiling, or any other failure) no later one is tried: all fall back to the
+    /// prior. The clusters of one head cover nearly the same region and fail together, and a
+    /// failed estimate costs as much as a cold start.
+    #[serde(default)]
+    pub follow_first: bool,
     /// Estimate a global intensity offset too (default false).
     pub offset: bool,
     /// Smallest number of clusters (Odobez: 20).
@@ -100,6 +110,7 @@ impl Default for MotionSettings {
             cluster_iterations: 3,
             occlusion_aware: false,
             warm_start: true,
+            follow_first: false,
             working_radius: default_motion_working_radius(),
             frame_check_pixels: default_frame_check_pixels(),
         }

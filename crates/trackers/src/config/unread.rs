@@ -49,6 +49,7 @@ impl TrackerConfig {
             let MotionSettings {
                 estimator,
                 warm_start,
+                follow_first,
                 offset,
                 min_clusters,
                 clusters_per_particle,
@@ -61,6 +62,7 @@ impl TrackerConfig {
             let changed = [
                 ("motion.estimator", *estimator != d.estimator),
                 ("motion.warm_start", *warm_start != d.warm_start),
+                ("motion.follow_first", *follow_first != d.follow_first),
                 ("motion.offset", *offset != d.offset),
                 ("motion.min_clusters", *min_clusters != d.min_clusters),
                 (

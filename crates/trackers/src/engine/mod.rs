@@ -26,7 +26,6 @@ pub mod scale;
 use std::time::Instant;
 
 use dbn_switch::{ClutterHmm, ClutterState, OcclusionProcess, StatusHmm, StatusState};
-use motion_est::{MotionEstimator, Workspace};
 use rand_distr::{Distribution, StandardNormal};
 use smc_core::smooth::{SmootherSettings, smooth_marginals};
 use smc_core::{Bootstrap, ParticleFilter, ParticleSet, StepDiagnostics};
@@ -34,7 +33,6 @@ use vision_core::{Ellipse, GreyImage};
 
 use crate::api::{Estimate, Tracker, WeightedEllipse};
 use crate::appearance::Appearance;
-use crate::cluster::Clustering;
 use crate::config::{ClutterMode, OcclusionMode, ProposalKind, TrackerConfig};
 use crate::dynamics::reacquisition::TrackMemory;
 use crate::dynamics::{ClutterProcess, OcclusionModel, TrackerDynamics};
@@ -44,12 +42,12 @@ use crate::observation::{
     FrameContext, FrameObservation, LikelihoodModel, ObservationTerm, ReferenceLines,
 };
 use crate::particle::{Particle, default_status};
-use crate::proposal::{ClusterMotion, MotionProposal, WeightedPrior};
+use crate::proposal::{MotionProposal, WeightedPrior};
 use crate::smoothing::SmoothedRun;
 use crate::space::{STATE_SLOTS, ShapeBounds, StateVector};
 use crate::{Error, Result};
 use estimate::PosteriorSummary;
-use motion::MotionFrames;
+use motion::MotionStage;
 use scale::WorkingScale;
 
 /// The smallest width and height of a frame a track can start on.
@@ -63,17 +61,12 @@ pub struct ParticleTracker {
     likelihood: LikelihoodModel,
     filter: ParticleFilter<Particle>,
     set: Option<ParticleSet<Particle>>,
-    motion: MotionEstimator,
-    motion_frames: MotionFrames,
-    motion_workspace: Workspace,
-    clustering: Clustering,
-    clusters: Vec<ClusterMotion>,
+    /// The motion of each cluster of particles (with the motion proposal or the motion terms).
+    motion: MotionStage,
     previous: Vec<f32>,
     /// Reused per frame: the hidden parts of the particles, as the estimators take them.
     clutter_states: Vec<ClutterState>,
     status_states: Vec<StatusState>,
-    /// Reused per frame: the mean previous state of each motion cluster.
-    prev_means: Vec<StateVector>,
     /// The last reported state, and the edge counts along its lines on the current frame (the
     /// reference lines of the ratio form, see [`FrameObservation::reference`]).
     last_state: StateVector,
@@ -125,16 +118,11 @@ impl ParticleTracker {
             },
             likelihood: LikelihoodModel::new(&config.likelihood, config.appearance.as_ref())?,
             filter: ParticleFilter::new(config.filter.clone())?,
-            motion: MotionEstimator::new(config.motion.estimator)?,
+            motion: MotionStage::new(config.motion.estimator)?,
             set: None,
-            motion_frames: MotionFrames::default(),
-            motion_workspace: Workspace::new(),
-            clustering: Clustering::default(),
-            clusters: Vec::new(),
             previous: Vec::new(),
             clutter_states: Vec::new(),
             status_states: Vec::new(),
-            prev_means: Vec::new(),
             last_state: [0.0; STATE_SLOTS],
             reference: ReferenceLines::default(),
             memory: TrackMemory::new([0.0; STATE_SLOTS], 0),
@@ -201,7 +189,7 @@ impl ParticleTracker {
                 space: self.config.space,
                 current,
                 previous,
-                clusters: &self.clusters,
+                clusters: self.motion.clusters(),
                 reference: &self.reference,
                 appearance: self.appearance.as_ref(),
             },
@@ -223,7 +211,7 @@ impl ParticleTracker {
             ProposalKind::Motion => {
                 let proposal = MotionProposal {
                     dynamics: &self.dynamics,
-                    clusters: &self.clusters,
+                    clusters: self.motion.clusters(),
                     occlusion_aware: self.config.motion.occlusion_aware,
                 };
                 let prior = Some(&self.dynamics);
@@ -254,7 +242,7 @@ impl ParticleTracker {
     /// frames are tested on its pixels (see `engine::motion`). Nothing without motion estimates.
     pub(crate) fn offer_source_frame(&mut self, frame: &Frame<'_>, scale: WorkingScale) {
         if self.config.needs_motion() {
-            self.motion_frames.offer_source(frame, scale);
+            self.motion.offer_source(frame, scale);
         }
     }
 
@@ -343,12 +331,8 @@ impl Tracker for ParticleTracker {
         self.history.push_back(self.memory.clone());
         self.dynamics.reacquisition = None;
         if self.config.needs_motion() {
-            self.motion_frames.start(
-                &self.motion,
-                &frame,
-                &tracked,
-                self.config.motion.working_radius,
-            )?;
+            self.motion
+                .start(&frame, &tracked, self.config.motion.working_radius)?;
         }
         self.report(centre, start.elapsed().as_secs_f64() * 1e3)
     }
@@ -384,35 +368,33 @@ impl Tracker for ParticleTracker {
             self.filter
                 .resample_if_needed(set, &self.config.resampling, seed, step)?
         };
-        let motion_clusters = if self.config.needs_motion() {
-            self.estimate_cluster_motions(&frame)?
-        } else {
-            (0, 0)
+        // The motion of each cluster and the appearance's detection read disjoint parts of the
+        // tracker: with `filter.parallel` they run concurrently (the same results either way).
+        let Some(set) = self.set.as_mut() else {
+            return Err(Error::NotInitialised);
         };
-        self.detection = None;
-        if let Some(appearance) = &mut self.appearance {
-            let last = self.config.space.pose(&self.last_state).to_ellipse();
-            if let Some(e) = last {
-                appearance.read(&frame, &e);
-                let unlocked = self.frame > self.memory.last_locked();
-                let jumps = self
-                    .config
-                    .reacquisition
-                    .as_ref()
-                    .is_some_and(|r| unlocked || r.detection_share > 0.0);
-                if jumps {
-                    self.detection = appearance.detect(&e);
-                    // While locked, the abrupt-motion jump draws only at a detection that reads
-                    // as the target: where it has just vanished, the best patch of background
-                    // would take the track before the lock chain says lost.
-                    if !unlocked {
-                        self.detection = self.detection.filter(|&[x, y]| {
-                            appearance.looks_like_target(&Ellipse { cx: x, cy: y, ..e })
-                        });
-                    }
-                }
+        let parallel = self.config.filter.parallel;
+        let (config, dynamics, motion) = (&self.config, &self.dynamics, &mut self.motion);
+        let mut estimate_motion = || {
+            if config.needs_motion() {
+                motion.estimate(set.states_mut(), config, dynamics, &frame, parallel)
+            } else {
+                Ok((0, 0))
             }
-        }
+        };
+        let detect = DetectionStage {
+            config,
+            last_state: &self.last_state,
+            unlocked: self.frame > self.memory.last_locked(),
+        };
+        let appearance = &mut self.appearance;
+        let (motion_clusters, detection) = if parallel {
+            rayon::join(estimate_motion, || detect.run(appearance.as_mut(), &frame))
+        } else {
+            (estimate_motion(), detect.run(appearance.as_mut(), &frame))
+        };
+        let motion_clusters = motion_clusters?;
+        self.detection = detection;
         let Some(mut set) = self.set.take() else {
             return Err(Error::NotInitialised);
         };
@@ -520,6 +502,41 @@ impl Tracker for ParticleTracker {
                 })
             })
             .collect()
+    }
+}
+
+/// The appearance's part of a frame before the particles move: its read of the frame, and the
+/// detection the reacquisition's jump draws at.
+struct DetectionStage<'a> {
+    config: &'a TrackerConfig,
+    last_state: &'a StateVector,
+    /// Whether the last locked frame is before the last one.
+    unlocked: bool,
+}
+
+impl DetectionStage<'_> {
+    /// Reads `frame` into `appearance` around the last estimate and returns where the jump
+    /// component draws this frame, if anywhere.
+    fn run(&self, appearance: Option<&mut Appearance>, frame: &Frame<'_>) -> Option<[f64; 2]> {
+        let appearance = appearance?;
+        let e = self.config.space.pose(self.last_state).to_ellipse()?;
+        appearance.read(frame, &e);
+        let jumps = self
+            .config
+            .reacquisition
+            .as_ref()
+            .is_some_and(|r| self.unlocked || r.detection_share > 0.0);
+        if !jumps {
+            return None;
+        }
+        let detection = appearance.detect(&e);
+        if self.unlocked {
+            return detection;
+        }
+        // While locked, the abrupt-motion jump draws only at a detection that reads as the
+        // target: where it has just vanished, the best patch of background would take the track
+        // before the lock chain says lost.
+        detection.filter(|&[x, y]| appearance.looks_like_target(&Ellipse { cx: x, cy: y, ..e }))
     }
 }
 

@@ -17,13 +17,15 @@ use motion_est::{ModelSpec, MotionEstimator, MotionModel, Pyramid, Region, Windo
 use nalgebra::Matrix6;
 use vision_core::{Ellipse, GreyImage};
 
-use super::ParticleTracker;
 use super::scale::{Shrinker, WorkingScale};
-use crate::cluster::cluster_particles;
+use crate::Result;
+use crate::TrackerConfig;
+use crate::cluster::{Clustering, cluster_particles};
+use crate::dynamics::TrackerDynamics;
 use crate::frame::Frame;
+use crate::particle::Particle;
 use crate::proposal::{ClusterMotion, state_increment};
-use crate::space::{STATE_SLOTS, axpy};
-use crate::{Error, Result};
+use crate::space::{STATE_SLOTS, StateVector, axpy};
 
 /// The pyramids of the previous and the current frame that the motion is estimated between, at
 /// the motion's working scale (fixed at initialisation from the target's size).
@@ -253,77 +255,146 @@ impl MotionFrames {
     }
 }
 
-impl ParticleTracker {
-    pub(super) fn estimate_cluster_motions(&mut self, frame: &Frame<'_>) -> Result<(usize, usize)> {
-        let Some(set) = self.set.as_mut() else {
-            return Err(Error::NotInitialised);
-        };
-        let space = self.config.space;
-        self.motion_frames.advance(&self.motion, frame)?;
-        let scale = self.motion_frames.scale;
-        let k = self.config.motion.cluster_count(set.len());
+/// The view stage's motion from one frame to the next: the frames' pyramids, the clustering of
+/// the particles, and each cluster's motion as the motion proposal reads it.
+#[derive(Debug, Clone)]
+pub(super) struct MotionStage {
+    estimator: MotionEstimator,
+    frames: MotionFrames,
+    /// One per cluster, so that the clusters' estimates can run concurrently.
+    workspaces: Vec<Workspace>,
+    clustering: Clustering,
+    clusters: Vec<ClusterMotion>,
+    /// Reused per frame: the mean previous state of each cluster.
+    prev_means: Vec<StateVector>,
+}
+
+impl MotionStage {
+    pub(super) fn new(settings: motion_est::Settings) -> Result<Self> {
+        Ok(Self {
+            estimator: MotionEstimator::new(settings)?,
+            frames: MotionFrames::default(),
+            workspaces: Vec::new(),
+            clustering: Clustering::default(),
+            clusters: Vec::new(),
+            prev_means: Vec::new(),
+        })
+    }
+
+    /// Each cluster's motion of the last [`Self::estimate`], indexed by `Particle::cluster`.
+    pub(super) fn clusters(&self) -> &[ClusterMotion] {
+        &self.clusters
+    }
+
+    /// Sets the working scale for `target` and builds the first frame's pyramid (see
+    /// [`MotionFrames::start`]).
+    pub(super) fn start(
+        &mut self,
+        frame: &Frame<'_>,
+        target: &Ellipse,
+        working_radius: Option<f64>,
+    ) -> Result<()> {
+        self.frames
+            .start(&self.estimator, frame, target, working_radius)
+    }
+
+    /// See [`MotionFrames::offer_source`].
+    pub(super) fn offer_source(&mut self, frame: &Frame<'_>, scale: WorkingScale) {
+        self.frames.offer_source(frame, scale);
+    }
+
+    /// Clusters the (resampled) particles and estimates each cluster's motion from the previous
+    /// frame to `frame` (Odobez §5); returns the clusters used and those that fell back to the
+    /// prior.
+    ///
+    /// With [`MotionSettings::follow_first`](crate::MotionSettings::follow_first) the first
+    /// cluster is estimated cold and every later one from its estimate, concurrently when
+    /// `parallel` (on rayon's pool; the same estimates either way), or none when it failed.
+    /// Otherwise the clusters are estimated in order, each from the last converged estimate
+    /// before it ([`MotionSettings::warm_start`](crate::MotionSettings::warm_start)).
+    pub(super) fn estimate(
+        &mut self,
+        set: &mut [Particle],
+        config: &TrackerConfig,
+        dynamics: &TrackerDynamics,
+        frame: &Frame<'_>,
+        parallel: bool,
+    ) -> Result<(usize, usize)> {
+        let space = config.space;
+        self.frames.advance(&self.estimator, frame)?;
+        let k = config.motion.cluster_count(set.len());
         cluster_particles(
             space,
-            set.states_mut(),
+            set,
             k,
-            self.config.motion.cluster_iterations,
+            config.motion.cluster_iterations,
             &mut self.clustering,
         );
         // The mean previous state of each cluster, for the fallback prediction.
         let mut prev_means = std::mem::take(&mut self.prev_means);
         prev_means.clear();
         prev_means.resize(k, [0.0; STATE_SLOTS]);
-        for p in set.states() {
+        for p in set.iter() {
             axpy(&mut prev_means[p.cluster as usize], 1.0, &p.prev);
         }
-        let spec =
-            motion_est::ModelSpec::new(motion_est::MotionModel::Affine, self.config.motion.offset);
+        let spec = ModelSpec::new(MotionModel::Affine, config.motion.offset);
         // Each cluster's motion at the working scale, in the tracker's pixels.
-        let mut candidates = std::mem::take(&mut self.motion_frames.candidates);
+        let mut candidates = std::mem::take(&mut self.frames.candidates);
         candidates.clear();
-        let mut warm: Option<Vec<f64>> = None;
-        for (c, mean) in self.clustering.means.iter().enumerate() {
-            let candidate = (self.clustering.sizes[c] > 0)
-                .then(|| space.pose(mean).to_ellipse())
-                .flatten()
-                .and_then(|frame_region| {
-                    let e = scale.to_working(&frame_region);
-                    let est = self
-                        .motion
-                        .estimate_from(
-                            &self.motion_frames.prev,
-                            &self.motion_frames.now,
-                            &Region::Ellipse(e),
-                            spec,
-                            Some([e.cx, e.cy]),
-                            warm.as_deref(),
-                            &mut self.motion_workspace,
-                        )
-                        // An estimate that could not separate the dominant motion from the rest
-                        // is an error (`motion_est::Error::Unreliable`), as is any other failure:
-                        // the cluster falls back to the prior prediction.
-                        .ok()?;
-                    // A start for the next cluster's estimate, whatever its test below.
-                    if self.config.motion.warm_start && est.converged {
-                        warm = Some(est.params.clone());
-                    }
-                    let (affine, covariance) =
-                        scale.affine_to_frame(est.affine(), &est.affine_covariance());
-                    Some(Candidate {
-                        region: frame_region,
-                        affine,
-                        covariance,
-                        offset: spec.offset.then(|| est.params[6]),
-                        converged: est.converged,
-                    })
-                });
-            candidates.push(candidate);
+        if self.workspaces.len() < k.max(1) {
+            self.workspaces.resize_with(k.max(1), Workspace::new);
         }
-        self.motion_frames.test_at_frame_resolution(
-            &self.motion,
+        let job = ClusterJob {
+            estimator: &self.estimator,
+            frames: &self.frames,
+            spec,
+        };
+        let regions: Vec<Option<Ellipse>> = (0..k)
+            .map(|c| {
+                (self.clustering.sizes[c] > 0)
+                    .then(|| space.pose(&self.clustering.means[c]).to_ellipse())
+                    .flatten()
+            })
+            .collect();
+        if config.motion.follow_first && k > 0 {
+            // The first cluster cold; every later one from its estimate (concurrently when
+            // `parallel`), and none when it failed.
+            let (first, params) = job.run(regions[0], None, &mut self.workspaces[0]);
+            let failed = regions[0].is_some() && first.is_none();
+            candidates.push(first);
+            let warm = params.filter(|_| config.motion.warm_start);
+            let warm = warm.as_deref();
+            let rest = regions[1..].iter().zip(&mut self.workspaces[1..k]);
+            if failed {
+                candidates.resize(k, None);
+            } else if parallel {
+                use rayon::prelude::*;
+                let estimated: Vec<Option<Candidate>> = regions[1..]
+                    .par_iter()
+                    .zip(&mut self.workspaces[1..k])
+                    .map(|(&region, ws)| job.run(region, warm, ws).0)
+                    .collect();
+                candidates.extend(estimated);
+            } else {
+                candidates.extend(rest.map(|(&region, ws)| job.run(region, warm, ws).0));
+            }
+        } else {
+            // In order, each cluster from the last converged estimate before it (cold until one
+            // converges).
+            let mut warm: Option<Vec<f64>> = None;
+            for (&region, ws) in regions.iter().zip(&mut self.workspaces) {
+                let (candidate, params) = job.run(region, warm.as_deref(), ws);
+                if config.motion.warm_start && candidate.is_some_and(|c| c.converged) {
+                    warm = params;
+                }
+                candidates.push(candidate);
+            }
+        }
+        self.frames.test_at_frame_resolution(
+            &self.estimator,
             &mut candidates,
-            self.config.motion.frame_check_pixels,
-            &mut self.motion_workspace,
+            config.motion.frame_check_pixels,
+            &mut self.workspaces[0],
         )?;
         self.clusters.clear();
         let (mut used, mut failures) = (0, 0);
@@ -331,26 +402,74 @@ impl ParticleTracker {
             if self.clustering.sizes[c] == 0 {
                 // No particle will read this entry; it only keeps the indices aligned.
                 self.clusters
-                    .push(ClusterMotion::fallback(&self.dynamics, mean, mean));
+                    .push(ClusterMotion::fallback(dynamics, mean, mean));
                 continue;
             }
             used += 1;
             let size = self.clustering.sizes[c] as f64;
             let mean_prev = prev_means[c].map(|v| v / size);
-            let sigmas = self.dynamics.settings.sigmas(space, mean);
+            let sigmas = dynamics.settings.sigmas(space, mean);
             let motion = candidate.and_then(|m| {
                 let (d, cov) = state_increment(space, mean, &m.affine, &m.covariance).ok()?;
                 ClusterMotion::new(space, d, &cov, &sigmas, m.converged)
             });
             let motion = motion.unwrap_or_else(|| {
                 failures += 1;
-                ClusterMotion::fallback(&self.dynamics, mean, &mean_prev)
+                ClusterMotion::fallback(dynamics, mean, &mean_prev)
             });
             self.clusters.push(motion);
         }
         self.prev_means = prev_means;
-        self.motion_frames.candidates = candidates;
+        self.frames.candidates = candidates;
         Ok((used, failures))
+    }
+}
+
+/// What every cluster's estimate of one frame shares.
+struct ClusterJob<'a> {
+    estimator: &'a MotionEstimator,
+    frames: &'a MotionFrames,
+    spec: ModelSpec,
+}
+
+impl ClusterJob<'_> {
+    /// The motion of a cluster over `frame_region` (`None`: an empty cluster, or a mean with no
+    /// ellipse), from `warm` or cold, and the estimate's parameters (a start for others).
+    fn run(
+        &self,
+        frame_region: Option<Ellipse>,
+        warm: Option<&[f64]>,
+        ws: &mut Workspace,
+    ) -> (Option<Candidate>, Option<Vec<f64>>) {
+        let Some(frame_region) = frame_region else {
+            return (None, None);
+        };
+        let scale = self.frames.scale;
+        let e = scale.to_working(&frame_region);
+        let est = self.estimator.estimate_from(
+            &self.frames.prev,
+            &self.frames.now,
+            &Region::Ellipse(e),
+            self.spec,
+            Some([e.cx, e.cy]),
+            warm,
+            ws,
+        );
+        // An estimate that could not separate the dominant motion from the rest is an error
+        // (`motion_est::Error::Unreliable`), as is any other failure: the cluster falls back to
+        // the prior prediction.
+        let Ok(est) = est else {
+            return (None, None);
+        };
+        let (affine, covariance) = scale.affine_to_frame(est.affine(), &est.affine_covariance());
+        let candidate = Candidate {
+            region: frame_region,
+            affine,
+            covariance,
+            offset: self.spec.offset.then(|| est.params[6]),
+            converged: est.converged,
+        };
+        (Some(candidate), Some(est.params.clone()))
     }
 }
 
