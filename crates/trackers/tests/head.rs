@@ -309,9 +309,9 @@ fn estimates(config: trackers::TrackerConfig) -> Vec<trackers::Estimate> {
 
 #[test]
 fn the_same_output_for_one_thread_or_many_and_sequentially() {
-    // `head` (five clusters following the first) and `m3` (twenty, each estimated in turn):
-    // with `filter.parallel` the motion and the detection run concurrently, and so do `head`'s
-    // clusters after the first.
+    // `head` (the appearance's detection) and `m3` (twenty clusters): with `filter.parallel`
+    // the cluster motions and the detection run concurrently, and the weights by chunks of
+    // particles.
     for preset in [Preset::Head, Preset::M3] {
         for seed in [1, 2] {
             let sequential = estimates(preset.config(150, seed));

@@ -43,18 +43,17 @@ pub struct MotionSettings {
     pub estimator: motion_est::Settings,
     /// Start each cluster's estimate from the last converged one before it (default true):
     /// clusters of one frame cover nearly the same region, so the estimator can skip its coarse
-    /// levels. With [`Self::follow_first`], from the first cluster's estimate.
+    /// levels.
     #[serde(default = "yes")]
     pub warm_start: bool,
-    /// Treat the clusters as one region (default false: each is estimated in turn, as Odobez
-    /// does). The first cluster is estimated cold, every later one from its estimate, converged
-    /// or not, so that they can run concurrently with `filter.parallel`; and when the first
-    /// cluster's motion cannot be estimated (no dominant motion within the estimator's
-    /// reliability ceiling, or any other failure) no later one is tried: all fall back to the
-    /// prior. The clusters of one head cover nearly the same region and fail together, and a
-    /// failed estimate costs as much as a cold start.
+    /// When the first cluster's motion cannot be estimated (no dominant motion within the
+    /// estimator's reliability ceiling, or any other failure), estimate no later cluster of the
+    /// frame: all fall back to the prior (default false: every cluster is estimated, as Odobez
+    /// does; `head` too). A speed setting: the clusters of one head cover nearly the same region
+    /// and nearly always fail together, and a failed estimate costs as much as a cold start, but
+    /// the few later clusters that would have succeeded carry fast motion (docs/DECISIONS.md).
     #[serde(default)]
-    pub follow_first: bool,
+    pub fail_together: bool,
     /// Estimate a global intensity offset too (default false).
     pub offset: bool,
     /// Smallest number of clusters (Odobez: 20).
@@ -110,7 +109,7 @@ impl Default for MotionSettings {
             cluster_iterations: 3,
             occlusion_aware: false,
             warm_start: true,
-            follow_first: false,
+            fail_together: false,
             working_radius: default_motion_working_radius(),
             frame_check_pixels: default_frame_check_pixels(),
         }

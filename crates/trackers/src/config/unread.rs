@@ -49,7 +49,7 @@ impl TrackerConfig {
             let MotionSettings {
                 estimator,
                 warm_start,
-                follow_first,
+                fail_together,
                 offset,
                 min_clusters,
                 clusters_per_particle,
@@ -62,7 +62,7 @@ impl TrackerConfig {
             let changed = [
                 ("motion.estimator", *estimator != d.estimator),
                 ("motion.warm_start", *warm_start != d.warm_start),
-                ("motion.follow_first", *follow_first != d.follow_first),
+                ("motion.fail_together", *fail_together != d.fail_together),
                 ("motion.offset", *offset != d.offset),
                 ("motion.min_clusters", *min_clusters != d.min_clusters),
                 (

@@ -377,7 +377,7 @@ impl Tracker for ParticleTracker {
         let (config, dynamics, motion) = (&self.config, &self.dynamics, &mut self.motion);
         let mut estimate_motion = || {
             if config.needs_motion() {
-                motion.estimate(set.states_mut(), config, dynamics, &frame, parallel)
+                motion.estimate(set.states_mut(), config, dynamics, &frame)
             } else {
                 Ok((0, 0))
             }

@@ -261,8 +261,7 @@ impl MotionFrames {
 pub(super) struct MotionStage {
     estimator: MotionEstimator,
     frames: MotionFrames,
-    /// One per cluster, so that the clusters' estimates can run concurrently.
-    workspaces: Vec<Workspace>,
+    workspace: Workspace,
     clustering: Clustering,
     clusters: Vec<ClusterMotion>,
     /// Reused per frame: the mean previous state of each cluster.
@@ -274,7 +273,7 @@ impl MotionStage {
         Ok(Self {
             estimator: MotionEstimator::new(settings)?,
             frames: MotionFrames::default(),
-            workspaces: Vec::new(),
+            workspace: Workspace::new(),
             clustering: Clustering::default(),
             clusters: Vec::new(),
             prev_means: Vec::new(),
@@ -307,18 +306,16 @@ impl MotionStage {
     /// frame to `frame` (Odobez §5); returns the clusters used and those that fell back to the
     /// prior.
     ///
-    /// With [`MotionSettings::follow_first`](crate::MotionSettings::follow_first) the first
-    /// cluster is estimated cold and every later one from its estimate, concurrently when
-    /// `parallel` (on rayon's pool; the same estimates either way), or none when it failed.
-    /// Otherwise the clusters are estimated in order, each from the last converged estimate
-    /// before it ([`MotionSettings::warm_start`](crate::MotionSettings::warm_start)).
+    /// The clusters are estimated in order, each from the last converged estimate before it
+    /// ([`MotionSettings::warm_start`](crate::MotionSettings::warm_start)); with
+    /// [`MotionSettings::fail_together`](crate::MotionSettings::fail_together) none after a
+    /// first cluster whose estimate failed.
     pub(super) fn estimate(
         &mut self,
         set: &mut [Particle],
         config: &TrackerConfig,
         dynamics: &TrackerDynamics,
         frame: &Frame<'_>,
-        parallel: bool,
     ) -> Result<(usize, usize)> {
         let space = config.space;
         self.frames.advance(&self.estimator, frame)?;
@@ -341,9 +338,6 @@ impl MotionStage {
         // Each cluster's motion at the working scale, in the tracker's pixels.
         let mut candidates = std::mem::take(&mut self.frames.candidates);
         candidates.clear();
-        if self.workspaces.len() < k.max(1) {
-            self.workspaces.resize_with(k.max(1), Workspace::new);
-        }
         let job = ClusterJob {
             estimator: &self.estimator,
             frames: &self.frames,
@@ -356,45 +350,28 @@ impl MotionStage {
                     .flatten()
             })
             .collect();
-        if config.motion.follow_first && k > 0 {
-            // The first cluster cold; every later one from its estimate (concurrently when
-            // `parallel`), and none when it failed.
-            let (first, params) = job.run(regions[0], None, &mut self.workspaces[0]);
-            let failed = regions[0].is_some() && first.is_none();
-            candidates.push(first);
-            let warm = params.filter(|_| config.motion.warm_start);
-            let warm = warm.as_deref();
-            let rest = regions[1..].iter().zip(&mut self.workspaces[1..k]);
-            if failed {
-                candidates.resize(k, None);
-            } else if parallel {
-                use rayon::prelude::*;
-                let estimated: Vec<Option<Candidate>> = regions[1..]
-                    .par_iter()
-                    .zip(&mut self.workspaces[1..k])
-                    .map(|(&region, ws)| job.run(region, warm, ws).0)
-                    .collect();
-                candidates.extend(estimated);
-            } else {
-                candidates.extend(rest.map(|(&region, ws)| job.run(region, warm, ws).0));
+        // In order, each cluster from the last converged estimate before it (cold until one
+        // converges); with `fail_together`, none after a first cluster whose estimate failed.
+        let mut warm: Option<Vec<f64>> = None;
+        let mut first_failed = false;
+        for (c, &region) in regions.iter().enumerate() {
+            if first_failed {
+                candidates.push(None);
+                continue;
             }
-        } else {
-            // In order, each cluster from the last converged estimate before it (cold until one
-            // converges).
-            let mut warm: Option<Vec<f64>> = None;
-            for (&region, ws) in regions.iter().zip(&mut self.workspaces) {
-                let (candidate, params) = job.run(region, warm.as_deref(), ws);
-                if config.motion.warm_start && candidate.is_some_and(|c| c.converged) {
-                    warm = params;
-                }
-                candidates.push(candidate);
+            let (candidate, params) = job.run(region, warm.as_deref(), &mut self.workspace);
+            if config.motion.warm_start && candidate.is_some_and(|m| m.converged) {
+                warm = params;
             }
+            first_failed =
+                config.motion.fail_together && c == 0 && region.is_some() && candidate.is_none();
+            candidates.push(candidate);
         }
         self.frames.test_at_frame_resolution(
             &self.estimator,
             &mut candidates,
             config.motion.frame_check_pixels,
-            &mut self.workspaces[0],
+            &mut self.workspace,
         )?;
         self.clusters.clear();
         let (mut used, mut failures) = (0, 0);
@@ -434,7 +411,7 @@ struct ClusterJob<'a> {
 
 impl ClusterJob<'_> {
     /// The motion of a cluster over `frame_region` (`None`: an empty cluster, or a mean with no
-    /// ellipse), from `warm` or cold, and the estimate's parameters (a start for others).
+    /// ellipse), from `warm` or cold, and the estimate's parameters (a start for the next).
     fn run(
         &self,
         frame_region: Option<Ellipse>,
