@@ -392,3 +392,35 @@ fn particles_diagnostics_and_tempering_are_reported() {
         assert!(e.state.iter().take(4).all(|v| v.is_finite() && *v != 0.0));
     }
 }
+
+#[test]
+fn clusters_failing_together_differ_only_where_the_first_estimate_failed() {
+    // `motion.fail_together` gives up on a frame's later clusters once the first one's estimate
+    // fails. Against `head` as it is (every cluster estimated), the runs agree up to the first
+    // frame where they differ, and on that frame the give-up run has failed every cluster
+    // while `head` estimated some.
+    let mut diverged = 0;
+    for seed in [1, 2, 3] {
+        let every = estimates(Preset::Head.config(150, seed));
+        let mut config = Preset::Head.config(150, seed);
+        config.motion.fail_together = true;
+        let given_up = estimates(config);
+        let text = |e: &trackers::Estimate| format!("{e:?}");
+        let Some(k) = (0..every.len()).find(|&k| text(&every[k]) != text(&given_up[k])) else {
+            continue;
+        };
+        diverged += 1;
+        let ((used, failed), (used_every, failed_every)) =
+            (given_up[k].motion_clusters, every[k].motion_clusters);
+        assert!(
+            used > 0 && failed == used && failed_every < used_every,
+            "seed {seed}, frame {}: {failed} of {used} failed with the give-up, \
+             {failed_every} of {used_every} without",
+            k + 1
+        );
+    }
+    assert!(
+        diverged > 0,
+        "no seed reached a frame where the first estimate alone failed"
+    );
+}
