@@ -25,7 +25,7 @@ PARTS = [
     ("motion: cold start's search", ["best_start"]),
     ("motion: pyramids", ["MotionFrames::advance", "MotionFrames::build", "MotionFrames::start"]),
     ("motion: test on the frame's pixels", ["test_at_frame_resolution"]),
-    ("motion: Gauss-Newton fits", ["MotionStage::estimate", "ClusterJob::run"]),
+    ("motion: Gauss-Newton fits", ["MotionStage::estimate"]),
     ("shrinking to the working scale", ["Shrinker::"]),
     ("detection and reacquisition", ["Appearance::detect", "reacquisition"]),
     ("appearance terms (likelihood)", ["log_likelihood_batch"]),

@@ -338,32 +338,47 @@ impl MotionStage {
         // Each cluster's motion at the working scale, in the tracker's pixels.
         let mut candidates = std::mem::take(&mut self.frames.candidates);
         candidates.clear();
-        let job = ClusterJob {
-            estimator: &self.estimator,
-            frames: &self.frames,
-            spec,
-        };
-        let regions: Vec<Option<Ellipse>> = (0..k)
-            .map(|c| {
-                (self.clustering.sizes[c] > 0)
-                    .then(|| space.pose(&self.clustering.means[c]).to_ellipse())
-                    .flatten()
-            })
-            .collect();
-        // In order, each cluster from the last converged estimate before it (cold until one
-        // converges); with `fail_together`, none after a first cluster whose estimate failed.
+        let scale = self.frames.scale;
         let mut warm: Option<Vec<f64>> = None;
-        let mut first_failed = false;
-        for (c, &region) in regions.iter().enumerate() {
-            if first_failed {
-                candidates.push(None);
-                continue;
-            }
-            let (candidate, params) = job.run(region, warm.as_deref(), &mut self.workspace);
-            if config.motion.warm_start && candidate.is_some_and(|m| m.converged) {
-                warm = params;
-            }
-            first_failed =
+        // With `fail_together`, no cluster is estimated after a first one whose estimate failed.
+        let mut given_up = false;
+        for (c, mean) in self.clustering.means.iter().enumerate() {
+            let region = (self.clustering.sizes[c] > 0)
+                .then(|| space.pose(mean).to_ellipse())
+                .flatten()
+                .filter(|_| !given_up);
+            let candidate = region.and_then(|frame_region| {
+                let e = scale.to_working(&frame_region);
+                let est = self
+                    .estimator
+                    .estimate_from(
+                        &self.frames.prev,
+                        &self.frames.now,
+                        &Region::Ellipse(e),
+                        spec,
+                        Some([e.cx, e.cy]),
+                        warm.as_deref(),
+                        &mut self.workspace,
+                    )
+                    // An estimate that could not separate the dominant motion from the rest is
+                    // an error (`motion_est::Error::Unreliable`), as is any other failure: the
+                    // cluster falls back to the prior prediction.
+                    .ok()?;
+                // A start for the next cluster's estimate, whatever its test below.
+                if config.motion.warm_start && est.converged {
+                    warm = Some(est.params.clone());
+                }
+                let (affine, covariance) =
+                    scale.affine_to_frame(est.affine(), &est.affine_covariance());
+                Some(Candidate {
+                    region: frame_region,
+                    affine,
+                    covariance,
+                    offset: spec.offset.then(|| est.params[6]),
+                    converged: est.converged,
+                })
+            });
+            given_up |=
                 config.motion.fail_together && c == 0 && region.is_some() && candidate.is_none();
             candidates.push(candidate);
         }
@@ -399,54 +414,6 @@ impl MotionStage {
         self.prev_means = prev_means;
         self.frames.candidates = candidates;
         Ok((used, failures))
-    }
-}
-
-/// What every cluster's estimate of one frame shares.
-struct ClusterJob<'a> {
-    estimator: &'a MotionEstimator,
-    frames: &'a MotionFrames,
-    spec: ModelSpec,
-}
-
-impl ClusterJob<'_> {
-    /// The motion of a cluster over `frame_region` (`None`: an empty cluster, or a mean with no
-    /// ellipse), from `warm` or cold, and the estimate's parameters (a start for the next).
-    fn run(
-        &self,
-        frame_region: Option<Ellipse>,
-        warm: Option<&[f64]>,
-        ws: &mut Workspace,
-    ) -> (Option<Candidate>, Option<Vec<f64>>) {
-        let Some(frame_region) = frame_region else {
-            return (None, None);
-        };
-        let scale = self.frames.scale;
-        let e = scale.to_working(&frame_region);
-        let est = self.estimator.estimate_from(
-            &self.frames.prev,
-            &self.frames.now,
-            &Region::Ellipse(e),
-            self.spec,
-            Some([e.cx, e.cy]),
-            warm,
-            ws,
-        );
-        // An estimate that could not separate the dominant motion from the rest is an error
-        // (`motion_est::Error::Unreliable`), as is any other failure: the cluster falls back to
-        // the prior prediction.
-        let Ok(est) = est else {
-            return (None, None);
-        };
-        let (affine, covariance) = scale.affine_to_frame(est.affine(), &est.affine_covariance());
-        let candidate = Candidate {
-            region: frame_region,
-            affine,
-            covariance,
-            offset: self.spec.offset.then(|| est.params[6]),
-            converged: est.converged,
-        };
-        (Some(candidate), Some(est.params.clone()))
     }
 }
 

@@ -125,8 +125,8 @@ pub struct Args {
     /// What colours the contour in overlays.
     #[arg(long, value_enum, default_value_t)]
     pub colour_by: ColourBy,
-    /// Use all cores: the cluster motions beside the appearance's detection, the clusters after
-    /// the first, and the particles' weights in chunks (same results as one core).
+    /// Use all cores: the cluster motions beside the appearance's detection, and the particles'
+    /// weights in chunks (same results as one core).
     #[arg(long)]
     pub parallel: bool,
     /// Edge threshold of the measurement lines, grey levels per pixel [default: the preset's, 8,
