@@ -144,6 +144,12 @@ struct AxisBoxes {
     /// For output i, `taps[starts[i]..starts[i + 1]]`.
     starts: Vec<usize>,
     taps: Vec<(usize, f32)>,
+    /// The same boxes at a fixed width, for the pass along rows: output i averages the inputs
+    /// `first[i]..first[i] + width` with `weights[i * width..(i + 1) * width]`, the inputs a box
+    /// does not cover weighted zero (the box's own taps in order, zeros before or after them).
+    width: usize,
+    first: Vec<usize>,
+    weights: Vec<f32>,
 }
 
 impl AxisBoxes {
@@ -165,7 +171,29 @@ impl AxisBoxes {
             }
         }
         starts.push(taps.len());
-        Self { starts, taps }
+        let width = (0..out)
+            .map(|i| starts[i + 1] - starts[i])
+            .max()
+            .unwrap_or(0)
+            .min(n);
+        let (mut first, mut weights) = (Vec::with_capacity(out), Vec::with_capacity(out * width));
+        for i in 0..out {
+            let own = &taps[starts[i]..starts[i + 1]];
+            // The fixed-width span starts at the box's first input, or earlier where it would
+            // run past the last input.
+            let start = own.first().map_or(0, |t| t.0).min(n - width);
+            first.push(start);
+            weights.extend(
+                (start..start + width).map(|j| own.iter().find(|t| t.0 == j).map_or(0.0, |t| t.1)),
+            );
+        }
+        Self {
+            starts,
+            taps,
+            width,
+            first,
+            weights,
+        }
     }
 
     fn taps(&self, i: usize) -> &[(usize, f32)] {
@@ -219,7 +247,7 @@ impl Shrinker {
     /// Shrinks a grey frame into `pixels`.
     fn shrink(&mut self, data: &[f32]) {
         let mut pixels = std::mem::take(&mut self.pixels);
-        self.shrink_into(|k| data[k], &mut pixels);
+        self.shrink_into(data, &mut pixels);
         self.pixels = pixels;
     }
 
@@ -255,11 +283,15 @@ impl Shrinker {
         for y in first..=last {
             let row = &rgb[3 * y * w..3 * (y + 1) * w];
             let half = &mut self.half_rgb[3 * y * ow..3 * (y + 1) * ow];
+            let width = self.columns.width;
             for x in xs.clone() {
-                // -0.0, the neutral element `Iterator::sum` starts from.
+                // -0.0, the neutral element `Iterator::sum` starts from; the fixed-width boxes'
+                // zero-weighted inputs add +0.0 to these sums of levels, changing none.
                 let mut sums = [-0.0f32; 3];
-                for &(j, t) in self.columns.taps(x) {
-                    let pixel = &row[3 * j..3 * j + 3];
+                let start = self.columns.first[x];
+                let weights = &self.columns.weights[x * width..(x + 1) * width];
+                let pixels = &row[3 * start..3 * (start + width)];
+                for (&t, pixel) in weights.iter().zip(pixels.chunks_exact(3)) {
                     for (sum, &offset) in sums.iter_mut().zip(&order) {
                         *sum += t * f32::from(pixel[offset]);
                     }
@@ -285,18 +317,24 @@ impl Shrinker {
         }
     }
 
-    /// The box averages of the plane whose pixel k (row-major, the frame's size) is `value(k)`.
-    fn shrink_into(&mut self, value: impl Fn(usize) -> f32, out: &mut Vec<f32>) {
+    /// The box averages of `plane` (row-major, the frame's size).
+    fn shrink_into(&mut self, plane: &[f32], out: &mut Vec<f32>) {
         let (w, h) = self.size;
         let ow = self.out.0;
-        for y in 0..h {
-            for (x, v) in self.half[y * ow..(y + 1) * ow].iter_mut().enumerate() {
-                *v = self
-                    .columns
-                    .taps(x)
-                    .iter()
-                    .map(|&(j, t)| t * value(y * w + j))
-                    .sum();
+        let columns = &self.columns;
+        for (row, half) in plane
+            .chunks_exact(w)
+            .zip(self.half.chunks_exact_mut(ow))
+            .take(h)
+        {
+            // The common widths with their loops unrolled; the sums are the same to the bit.
+            match columns.width {
+                2 => average_row::<2>(row, columns, half),
+                3 => average_row::<3>(row, columns, half),
+                4 => average_row::<4>(row, columns, half),
+                5 => average_row::<5>(row, columns, half),
+                6 => average_row::<6>(row, columns, half),
+                _ => average_row_any(row, columns, half),
             }
         }
         out.resize(ow * self.out.1, 0.0);
@@ -309,6 +347,40 @@ impl Shrinker {
                 }
             }
         }
+    }
+}
+
+/// One row averaged along x by boxes `W` inputs wide ([`AxisBoxes::width`]). Each sum starts
+/// from −0.0 and adds the weighted inputs in order, as `Iterator::sum` over the box's own taps
+/// does; the zero-weighted inputs add ±0.0, which leaves every sum of frame levels unchanged.
+fn average_row<const W: usize>(row: &[f32], boxes: &AxisBoxes, out: &mut [f32]) {
+    for ((o, &start), weights) in out
+        .iter_mut()
+        .zip(&boxes.first)
+        .zip(boxes.weights.chunks_exact(W))
+    {
+        let inputs = &row[start..start + W];
+        let mut sum = -0.0f32;
+        for k in 0..W {
+            sum += weights[k] * inputs[k];
+        }
+        *o = sum;
+    }
+}
+
+/// [`average_row`] for any width.
+fn average_row_any(row: &[f32], boxes: &AxisBoxes, out: &mut [f32]) {
+    let width = boxes.width;
+    for ((o, &start), weights) in out
+        .iter_mut()
+        .zip(&boxes.first)
+        .zip(boxes.weights.chunks_exact(width.max(1)))
+    {
+        let mut sum = -0.0f32;
+        for (t, v) in weights.iter().zip(&row[start..start + width]) {
+            sum += t * v;
+        }
+        *o = sum;
     }
 }
 
@@ -451,6 +523,42 @@ mod tests {
     }
 
     #[test]
+    fn rows_average_to_the_bit_as_the_boxes_own_taps() {
+        // The fixed-width pass along rows gives, to the bit, each box's own taps summed in order
+        // (`Iterator::sum`), at whole and fractional factors, boxes clipped at the frame's edge
+        // included.
+        let (w, h) = (97, 5);
+        let plane: Vec<f32> = texture_rgb(w, h, 5)
+            .iter()
+            .take(w * h)
+            .map(|&v| f32::from(v) * 0.73)
+            .collect();
+        for radius in [17.0, 24.0, 33.7, 50.0, 61.3, 99.0, 140.0] {
+            let target = Ellipse::new(48.0, 2.0, radius, radius, 0.0);
+            let scale = WorkingScale::for_target(&target, 16.0);
+            let mut shrinker = Shrinker::new(scale, w, h);
+            let mut out = Vec::new();
+            shrinker.shrink_into(&plane, &mut out);
+            let ow = shrinker.out.0;
+            for y in 0..h {
+                for x in 0..ow {
+                    let reference: f32 = shrinker
+                        .columns
+                        .taps(x)
+                        .iter()
+                        .map(|&(j, t)| t * plane[y * w + j])
+                        .sum();
+                    assert_eq!(
+                        shrinker.half[y * ow + x].to_bits(),
+                        reference.to_bits(),
+                        "radius {radius}, ({x}, {y})"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn colour_shrinks_to_the_levels_of_each_channel_shrunk_alone() {
         // The three channels averaged together give, to the bit, what each gives through
         // `shrink_into` alone, rounded: on a textured frame, at whole and fractional factors.
@@ -465,7 +573,9 @@ mod tests {
             let fused = shrinker.rgb.clone();
             let mut plane = Vec::new();
             for (c, &offset) in order.iter().enumerate() {
-                shrinker.shrink_into(|k| f32::from(rgb[3 * k + offset]), &mut plane);
+                let channel: Vec<f32> =
+                    (0..w * h).map(|k| f32::from(rgb[3 * k + offset])).collect();
+                shrinker.shrink_into(&channel, &mut plane);
                 for (i, v) in plane.iter().enumerate() {
                     let level = v.round().clamp(0.0, 255.0) as u8;
                     assert_eq!(fused[3 * i + c], level, "factor {}", scale.factor());
