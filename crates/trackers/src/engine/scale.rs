@@ -137,16 +137,12 @@ impl WorkingScale {
     }
 }
 
-/// Box-average resampling of one axis: for each output index, the input indices and weights of
-/// the box it averages.
+/// Box-average resampling of one axis at a fixed width: output i averages the inputs
+/// `first[i]..first[i] + width` with `weights[i * width..(i + 1) * width]`. The inputs its box
+/// covers are weighted by their share of the box, in order; the others, before or after them,
+/// are weighted zero (a box narrower than the widest, or one moved back from the last input).
 #[derive(Debug, Clone, Default)]
 struct AxisBoxes {
-    /// For output i, `taps[starts[i]..starts[i + 1]]`.
-    starts: Vec<usize>,
-    taps: Vec<(usize, f32)>,
-    /// The same boxes at a fixed width, for the pass along rows: output i averages the inputs
-    /// `first[i]..first[i] + width` with `weights[i * width..(i + 1) * width]`, the inputs a box
-    /// does not cover weighted zero (the box's own taps in order, zeros before or after them).
     width: usize,
     first: Vec<usize>,
     weights: Vec<f32>,
@@ -155,49 +151,41 @@ struct AxisBoxes {
 impl AxisBoxes {
     /// Output pixel i averages input [i f, (i + 1) f) (corner coordinates), clipped to `n`.
     fn new(n: usize, out: usize, factor: f64) -> Self {
-        let mut starts = Vec::with_capacity(out + 1);
-        let mut taps = Vec::new();
-        for i in 0..out {
-            starts.push(taps.len());
-            let (lo, hi) = (i as f64 * factor, ((i + 1) as f64 * factor).min(n as f64));
-            let first = lo.floor() as usize;
-            let last = (hi.ceil() as usize).min(n);
-            let width = hi - lo;
-            for j in first..last {
-                let cover = (hi.min((j + 1) as f64) - lo.max(j as f64)).max(0.0);
-                if cover > 0.0 {
-                    taps.push((j, (cover / width) as f32));
-                }
-            }
-        }
-        starts.push(taps.len());
-        let width = (0..out)
-            .map(|i| starts[i + 1] - starts[i])
-            .max()
-            .unwrap_or(0)
-            .min(n);
-        let (mut first, mut weights) = (Vec::with_capacity(out), Vec::with_capacity(out * width));
-        for i in 0..out {
-            let own = &taps[starts[i]..starts[i + 1]];
-            // The fixed-width span starts at the box's first input, or earlier where it would
-            // run past the last input.
+        let boxes: Vec<Vec<(usize, f32)>> = (0..out)
+            .map(|i| {
+                let (lo, hi) = (i as f64 * factor, ((i + 1) as f64 * factor).min(n as f64));
+                let width = hi - lo;
+                (lo.floor() as usize..(hi.ceil() as usize).min(n))
+                    .filter_map(|j| {
+                        let cover = (hi.min((j + 1) as f64) - lo.max(j as f64)).max(0.0);
+                        (cover > 0.0).then_some((j, (cover / width) as f32))
+                    })
+                    .collect()
+            })
+            .collect();
+        let width = boxes.iter().map(Vec::len).max().unwrap_or(0).min(n);
+        let mut first = Vec::with_capacity(out);
+        let mut weights = vec![0.0; out * width];
+        for (i, own) in boxes.iter().enumerate() {
             let start = own.first().map_or(0, |t| t.0).min(n - width);
             first.push(start);
-            weights.extend(
-                (start..start + width).map(|j| own.iter().find(|t| t.0 == j).map_or(0.0, |t| t.1)),
-            );
+            for &(j, t) in own {
+                weights[i * width + j - start] = t;
+            }
         }
         Self {
-            starts,
-            taps,
             width,
             first,
             weights,
         }
     }
 
-    fn taps(&self, i: usize) -> &[(usize, f32)] {
-        &self.taps[self.starts[i]..self.starts[i + 1]]
+    /// The inputs output `i` averages and their weights, in order (its box's own taps).
+    fn taps(&self, i: usize) -> impl DoubleEndedIterator<Item = (usize, f32)> + '_ {
+        let weights = &self.weights[i * self.width..(i + 1) * self.width];
+        (self.first[i]..self.first[i] + self.width)
+            .zip(weights.iter().copied())
+            .filter(|&(_, t)| t != 0.0)
     }
 }
 
@@ -277,13 +265,13 @@ impl Shrinker {
             return;
         }
         // The frame's rows the region's output rows average.
-        let first = self.rows.taps(ys.start).first().map_or(0, |t| t.0);
-        let last = self.rows.taps(ys.end - 1).last().map_or(0, |t| t.0);
+        let first = self.rows.taps(ys.start).next().map_or(0, |t| t.0);
+        let last = self.rows.taps(ys.end - 1).next_back().map_or(0, |t| t.0);
         self.half_rgb.resize(3 * ow * self.size.1, 0.0);
+        let width = self.columns.width;
         for y in first..=last {
             let row = &rgb[3 * y * w..3 * (y + 1) * w];
             let half = &mut self.half_rgb[3 * y * ow..3 * (y + 1) * ow];
-            let width = self.columns.width;
             for x in xs.clone() {
                 // -0.0, the neutral element `Iterator::sum` starts from; the fixed-width boxes'
                 // zero-weighted inputs add +0.0 to these sums of levels, changing none.
@@ -304,7 +292,7 @@ impl Shrinker {
         for y in ys {
             let acc = &mut self.row_rgb[x0..x1];
             acc.fill(0.0);
-            for &(j, t) in self.rows.taps(y) {
+            for (j, t) in self.rows.taps(y) {
                 let src = &self.half_rgb[3 * j * ow + x0..3 * j * ow + x1];
                 for (o, s) in acc.iter_mut().zip(src) {
                     *o += t * s;
@@ -340,7 +328,7 @@ impl Shrinker {
         out.resize(ow * self.out.1, 0.0);
         for (y, out_row) in out.chunks_exact_mut(ow).enumerate() {
             out_row.fill(0.0);
-            for &(j, t) in self.rows.taps(y) {
+            for (j, t) in self.rows.taps(y) {
                 let src = &self.half[j * ow..(j + 1) * ow];
                 for (o, s) in out_row.iter_mut().zip(src) {
                     *o += t * s;
@@ -545,8 +533,7 @@ mod tests {
                     let reference: f32 = shrinker
                         .columns
                         .taps(x)
-                        .iter()
-                        .map(|&(j, t)| t * plane[y * w + j])
+                        .map(|(j, t)| t * plane[y * w + j])
                         .sum();
                     assert_eq!(
                         shrinker.half[y * ow + x].to_bits(),
