@@ -268,18 +268,16 @@ impl Shrinker {
         let first = self.rows.taps(ys.start).next().map_or(0, |t| t.0);
         let last = self.rows.taps(ys.end - 1).next_back().map_or(0, |t| t.0);
         self.half_rgb.resize(3 * ow * self.size.1, 0.0);
-        let width = self.columns.width;
         for y in first..=last {
             let row = &rgb[3 * y * w..3 * (y + 1) * w];
             let half = &mut self.half_rgb[3 * y * ow..3 * (y + 1) * ow];
             for x in xs.clone() {
-                // -0.0, the neutral element `Iterator::sum` starts from; the fixed-width boxes'
-                // zero-weighted inputs add +0.0 to these sums of levels, changing none.
+                // -0.0, the neutral element `Iterator::sum` starts from. Each box's own taps
+                // only: three channels a tap, the zero-weighted inputs would cost more here than
+                // the fixed width saves.
                 let mut sums = [-0.0f32; 3];
-                let start = self.columns.first[x];
-                let weights = &self.columns.weights[x * width..(x + 1) * width];
-                let pixels = &row[3 * start..3 * (start + width)];
-                for (&t, pixel) in weights.iter().zip(pixels.chunks_exact(3)) {
+                for (j, t) in self.columns.taps(x) {
+                    let pixel = &row[3 * j..3 * j + 3];
                     for (sum, &offset) in sums.iter_mut().zip(&order) {
                         *sum += t * f32::from(pixel[offset]);
                     }
