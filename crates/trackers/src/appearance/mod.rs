@@ -388,8 +388,8 @@ impl Appearance {
         window::footprint(width, height, rect, step)
     }
 
-    /// A buffer for [`Appearance::template_similarity`]'s samples.
-    pub fn samples(&self) -> Vec<f32> {
+    /// A buffer of one patch's samples on the template's grid.
+    fn samples(&self) -> Vec<f32> {
         vec![0.0; self.grid.len()]
     }
 
@@ -400,15 +400,14 @@ impl Appearance {
             .contrast(e, self.settings.contrast_ring, self.reference_area)
     }
 
-    /// The template's similarity ρ ∈ [−1, 1] (Odobez Eq. 23's normalised cross-correlation)
-    /// between the grey patch under `e` and the target's template; `None` when the patch cannot
-    /// be sampled or holds too few valid samples. `samples` is a buffer from
-    /// [`Appearance::samples`].
-    pub fn template_similarity(&self, e: &Ellipse, samples: &mut [f32]) -> Option<f64> {
-        let ncc = motion_est::NccSettings::default();
-        self.window.patch(e, &self.grid, samples).ok()?;
-        let d = motion_est::ncc_distance(&self.reference_template, samples, &ncc).ok()?;
-        Some(1.0 - d)
+    /// The template's matcher on the window last read, for many hypotheses (the window's grey
+    /// levels are checked once); `None` when they cannot be read.
+    pub fn template_matcher(&self) -> Option<TemplateMatcher<'_>> {
+        Some(TemplateMatcher {
+            appearance: self,
+            grey: self.window.grey().ok()?,
+            samples: self.samples(),
+        })
     }
 
     /// The grey contrast across the contour of `e`, normalised
@@ -448,7 +447,7 @@ impl Appearance {
         if !(stride > 0.0 && stride.is_finite()) {
             return None;
         }
-        let mut samples = self.samples();
+        let mut matcher = self.template_matcher();
         let mut best: Option<([f64; 2], f64)> = None;
         let mut y = y0;
         while y <= y1 {
@@ -457,8 +456,9 @@ impl Appearance {
                 let e = Ellipse::new(x, y, axes.0, axes.1, 0.0);
                 let mut score = s.colour_weight * self.colour_contrast(&e);
                 if s.template_weight > 0.0 {
-                    score += self
-                        .template_similarity(&e, &mut samples)
+                    score += matcher
+                        .as_mut()
+                        .and_then(|m| m.similarity(&e))
                         .map_or(f64::NEG_INFINITY, |r| s.template_weight * r);
                 }
                 if score.is_finite() && best.is_none_or(|(_, b)| score > b) {
@@ -539,6 +539,29 @@ impl Appearance {
     /// The lock chain's status: locked or lost, P(lost) as γ̂.
     pub fn status(&self) -> dbn_switch::StatusEstimate {
         self.lock.estimate()
+    }
+}
+
+/// The template's similarity on one frame's window ([`Appearance::template_matcher`]).
+#[derive(Debug)]
+pub struct TemplateMatcher<'a> {
+    appearance: &'a Appearance,
+    grey: vision_core::GreyImage<'a>,
+    samples: Vec<f32>,
+}
+
+impl TemplateMatcher<'_> {
+    /// The template's similarity ρ ∈ [−1, 1] (Odobez Eq. 23's normalised cross-correlation)
+    /// between the grey patch under `e` and the target's template; `None` when the patch cannot
+    /// be sampled or holds too few valid samples.
+    pub fn similarity(&mut self, e: &Ellipse) -> Option<f64> {
+        let a = self.appearance;
+        let ncc = motion_est::NccSettings::default();
+        a.window
+            .patch_from(self.grey, e, &a.grid, &mut self.samples)
+            .ok()?;
+        let d = motion_est::ncc_distance(&a.reference_template, &self.samples, &ncc).ok()?;
+        Some(1.0 - d)
     }
 }
 
@@ -649,6 +672,29 @@ mod tests {
     fn start(settings: AppearanceSettings, pixels: &(Vec<f32>, Vec<u8>)) -> Appearance {
         let e = Ellipse::new(40.0, 36.0, 14.0, 14.0, 0.0);
         Appearance::start(settings, &view(pixels), &e).unwrap()
+    }
+
+    #[test]
+    fn the_matcher_scores_the_first_frame_s_target_highest_and_each_patch_as_on_its_own() {
+        // On the first frame the template is the target's own patch: ρ = 1 there, lower off it;
+        // a matcher that scores many hypotheses gives each what the window's own patch gives it.
+        let pixels = frame(SKIN, WALL);
+        let a = start(AppearanceSettings::default(), &pixels);
+        let mut matcher = a.template_matcher().unwrap();
+        let ncc = motion_est::NccSettings::default();
+        let mut own = a.samples();
+        for (dx, dy) in [(0.0, 0.0), (3.0, 0.0), (-2.5, 4.0), (7.0, -6.0)] {
+            let e = Ellipse::new(40.0 + dx, 36.0 + dy, 14.0, 14.0, 0.0);
+            let rho = matcher.similarity(&e).unwrap();
+            a.window.patch(&e, &a.grid, &mut own).unwrap();
+            let alone = 1.0 - motion_est::ncc_distance(&a.reference_template, &own, &ncc).unwrap();
+            assert_eq!(rho.to_bits(), alone.to_bits(), "({dx}, {dy})");
+            if dx == 0.0 {
+                assert!((rho - 1.0).abs() < 1e-6, "{rho}");
+            } else {
+                assert!(rho < 0.95, "({dx}, {dy}): {rho}");
+            }
+        }
     }
 
     #[test]

@@ -328,8 +328,34 @@ impl WorkingWindow {
     /// # Errors
     /// A non-finite ellipse or a buffer whose length differs from the grid's.
     pub fn patch(&self, e: &Ellipse, grid: &[[f64; 2]], out: &mut [f32]) -> Result<usize> {
+        self.patch_from(self.grey()?, e, grid, out)
+    }
+
+    /// The grey window as an image, its pixels checked once, for [`Self::patch_from`].
+    ///
+    /// # Errors
+    /// A non-finite grey level.
+    pub fn grey(&self) -> Result<vision_core::GreyImage<'_>> {
+        Ok(vision_core::GreyImage::new(
+            self.width,
+            self.height,
+            &self.grey,
+        )?)
+    }
+
+    /// [`Self::patch`] from the window's grey image `view` ([`Self::grey`]), which many patches
+    /// share: the image's check runs once, not once a patch.
+    ///
+    /// # Errors
+    /// As [`Self::patch`].
+    pub fn patch_from(
+        &self,
+        view: vision_core::GreyImage<'_>,
+        e: &Ellipse,
+        grid: &[[f64; 2]],
+        out: &mut [f32],
+    ) -> Result<usize> {
         let (cx, cy, a, b) = self.to_working(e);
-        let view = vision_core::GreyImage::new(self.width, self.height, &self.grey)?;
         let axes = nalgebra::Matrix2::new(a, 0.0, 0.0, b);
         // Working pixel (i, j) covers [i, i + 1): its sample sits at i + 0.5.
         Ok(motion_est::sample_patch_into(

@@ -3,6 +3,7 @@
 //! target's template.
 
 use super::{FrameContext, ObservationTerm, add_appearance_measure};
+use crate::appearance::Appearance;
 use crate::particle::Particle;
 
 /// ρ, `weight` nats per unit.
@@ -23,9 +24,9 @@ impl ObservationTerm for TemplateMatch {
         particles: &[Particle],
         out: &mut [f64],
     ) {
-        let mut samples = frame.appearance.map(|a| a.samples()).unwrap_or_default();
-        add_appearance_measure(frame, particles, out, self.weight, |a, e| {
-            a.template_similarity(e, &mut samples)
+        let mut matcher = frame.appearance.and_then(Appearance::template_matcher);
+        add_appearance_measure(frame, particles, out, self.weight, |_, e| {
+            matcher.as_mut()?.similarity(e)
         });
     }
 }
