@@ -447,7 +447,9 @@ impl Appearance {
         if !(stride > 0.0 && stride.is_finite()) {
             return None;
         }
-        let mut matcher = self.template_matcher();
+        // The template is read only where it weighs: the matcher checks the window's grey levels.
+        let template = s.template_weight > 0.0;
+        let mut matcher = template.then(|| self.template_matcher()).flatten();
         let mut best: Option<([f64; 2], f64)> = None;
         let mut y = y0;
         while y <= y1 {
@@ -455,7 +457,7 @@ impl Appearance {
             while x <= x1 {
                 let e = Ellipse::new(x, y, axes.0, axes.1, 0.0);
                 let mut score = s.colour_weight * self.colour_contrast(&e);
-                if s.template_weight > 0.0 {
+                if template {
                     score += matcher
                         .as_mut()
                         .and_then(|m| m.similarity(&e))
