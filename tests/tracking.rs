@@ -273,13 +273,15 @@ fn head_follows_a_target_that_zooms_out_and_back() {
     // The zoom scene with two changes of 60 % over 10 frames: the target's size goes from 50 px
     // to 20 px and back to 32 px. Held-out footage had targets that zoom; a pull of the size
     // towards a remembered one (`dynamics.shape_reversion` 0.05, which gains on the development
-    // set) fails here: the box stays near 43 px while the target is 20 px, mean IoU 0.48 on
-    // seed 1 (docs/DECISIONS.md), as did an abrupt-motion jump that kept the last estimate's
-    // size: its particles escaped the prior's penalty on the fast shrink and held the old size
-    // (docs/DECISIONS.md). The per-seed mean IoU moves between 0.64 and 0.79 with the draws
-    // alone, so the test reads eight seeds: `head`'s, seeds 1–8, 0.642, 0.697, 0.705, 0.726,
-    // 0.743, 0.725, 0.766, 0.759 (without its jump 0.791, 0.723, 0.728, 0.689, 0.731, 0.700,
-    // 0.747, 0.687).
+    // set) fails here: the box stays near 43 px while the target is 20 px, as did an
+    // abrupt-motion jump that kept the last estimate's size (docs/DECISIONS.md).
+    // The per-seed mean IoU moves with the draws alone: `head`'s, over seeds 1–40, averages
+    // 0.684 with a spread (s.d.) of 0.081, five seeds below 0.6 and the lowest at 0.469 (with
+    // five motion clusters 0.694, 0.065 and three), so neither one seed nor a mean over eight
+    // can judge it. The test reads 24 seeds (`head`: mean 0.681, four below 0.6) and asks for a
+    // mean above 0.665, about two standard errors of a 24-seed mean under the 40-seed ones, and
+    // at most five seeds below 0.6, which `head`'s own rate exceeds on few draws of 24; the size
+    // pull scores 0.648.
     let mut p = ScenarioParams::preset(Scenario::Zoom);
     p.frames = 200;
     let changes = p.scale_changes.as_mut().unwrap();
@@ -297,14 +299,20 @@ fn head_follows_a_target_that_zooms_out_and_back() {
         "the scene zooms by {:.2}",
         large / small
     );
-    let means: Vec<f64> = (1..=8)
+    let means: Vec<f64> = (1..=24)
         .map(|seed| {
             let m = mean(&ious(&clip, &track(&clip, Preset::Head.config(200, seed))));
             println!("seed {seed}: head's mean IoU through the zoom {m:.3}");
             m
         })
         .collect();
-    let worst = means.iter().copied().fold(f64::MAX, f64::min);
-    assert!(worst > 0.6, "a seed collapsed to the old size: {means:.3?}");
-    assert!(mean(&means) > 0.7, "mean IoU over seeds 1–8: {means:.3?}");
+    let collapsed = means.iter().filter(|&&m| m < 0.6).count();
+    assert!(
+        collapsed <= 5,
+        "{collapsed} of 24 seeds collapsed: {means:.3?}"
+    );
+    assert!(
+        mean(&means) > 0.665,
+        "mean IoU over seeds 1–24: {means:.3?}"
+    );
 }

@@ -16,7 +16,7 @@
 //! | `w-occ` | Wu §5 | prior, {β, λ} HMM, γ walk (σ_γ 0.3), reacquisition | Wu Eq. 11–12, γ as one hidden arc |
 //! | `w-eval` | Wu §6.3 | prior, {β, λ} HMM, {α, γ} HMM, reacquisition | Wu Eq. 11–12, γ as one hidden arc |
 //! | `full` | neither | motion, Eq. 16, all hidden processes | Wu Eq. 11–12 · p_c2 · p_c1 · prior / q |
-//! | `head` | neither (recommended for real footage) | motion, Eq. 16 (5 clusters), Gaussian AR2 prior, at a working scale | colour contrast · template ([`appearance`]) · prior / q |
+//! | `head` | neither (recommended for real footage) | motion, Eq. 16 (one cluster), Gaussian AR2 prior, at a working scale | colour contrast · template ([`appearance`]) · prior / q |
 //!
 //! # Example
 //! ```

@@ -396,13 +396,18 @@ fn particles_diagnostics_and_tempering_are_reported() {
 #[test]
 fn clusters_failing_together_differ_only_where_the_first_estimate_failed() {
     // `motion.fail_together` gives up on a frame's later clusters once the first one's estimate
-    // fails. Against `head` as it is (every cluster estimated), the runs agree up to the first
-    // frame where they differ, and on that frame the give-up run has failed every cluster
-    // while `head` estimated some.
+    // fails. Against `head` with five clusters, every one estimated, the runs agree up to the
+    // first frame where they differ, and on that frame the give-up run has failed every
+    // cluster while the other estimated some.
+    let five = |seed| {
+        let mut config = Preset::Head.config(150, seed);
+        config.motion.min_clusters = 5;
+        config
+    };
     let mut diverged = 0;
     for seed in [1, 2, 3] {
-        let every = estimates(Preset::Head.config(150, seed));
-        let mut config = Preset::Head.config(150, seed);
+        let every = estimates(five(seed));
+        let mut config = five(seed);
         config.motion.fail_together = true;
         let given_up = estimates(config);
         let text = |e: &trackers::Estimate| format!("{e:?}");

@@ -267,16 +267,15 @@ impl Preset {
             // most sequences (docs/DECISIONS.md).
             Preset::Head => TrackerConfig {
                 // Odobez's motion proposal (Eq. 16): each particle moved by the robust affine
-                // motion of its cluster, measured at the 16 px working scale. On the development
-                // set under a fast camera zoom it helps most sequences; as shot it costs Freeman1
-                // (docs/RESULTS.md, "What each part of `head` buys"). Five clusters, not Odobez's
-                // 20: every cluster is one motion estimate a frame, and one cluster lost a fast
-                // zoom-out (docs/DECISIONS.md). Every cluster is estimated, also where the first one
-                // fails: giving up on the others then (`motion.fail_together`) is 1.2–1.5×
-                // faster but lost DragonBaby's OPE (docs/DECISIONS.md).
+                // motion of its cluster, measured at the 16 px working scale. Under a fast camera
+                // zoom it helps most development sequences; as shot it costs Freeman1
+                // (docs/RESULTS.md, "What each part of `head` buys"). One cluster, not Odobez's
+                // 20: every cluster is one motion estimate a frame, and five were no better on
+                // the footage as shot, under the stress suite's abrupt motion, under a zoom or at
+                // half the frame rate, but half as fast (docs/DECISIONS.md).
                 proposal: ProposalKind::Motion,
                 motion: MotionSettings {
-                    min_clusters: 5,
+                    min_clusters: 1,
                     clusters_per_particle: 0.0,
                     ..MotionSettings::default()
                 },
